@@ -1,0 +1,17 @@
+"""Static checks, one small module per rule family.
+
+``REGISTRY`` maps a rule code to the function that checks it: explicit, no discovery magic.
+Each family module exposes its own ``CHECKS`` dict; the test suite checks that the registry and
+the static part of the catalogue match one to one.
+"""
+from __future__ import annotations
+
+from ..context import Check
+from . import algebraic, core, enable, header, index1, structure
+
+REGISTRY: dict[str, Check] = {}
+for _module in (header, enable, algebraic, structure, core, index1):
+    for _code, _check in _module.CHECKS.items():
+        if _code in REGISTRY:  # pragma: no cover - a defect caught by the tests
+            raise RuntimeError(f"rule {_code} registered twice")
+        REGISTRY[_code] = _check

@@ -1,0 +1,219 @@
+"""Command line: argument parsing and wiring only; computes the exit code.
+
+Exit codes: 0 no error-level finding, 1 at least one, 2 usage or internal error.
+"""
+from __future__ import annotations
+
+import argparse
+import logging
+import os
+import sys
+from pathlib import Path
+from typing import Sequence
+
+from . import __version__
+from .catalogue import Catalogue, CatalogueError, RuleSpec, default_catalogue
+from .config import ConfigError, load_config
+from .drafts import ALL_DRAFTS, DRAFT_LABELS
+from .engine import EngineOptions, check_paths
+from .findings import Severity
+from .reporters import REPORTER_BY_NAME
+
+EXIT_OK, EXIT_FINDINGS, EXIT_USAGE = 0, 1, 2
+
+
+class UsageError(Exception):
+    pass
+
+
+def _split(values: Sequence[str] | None) -> tuple[str, ...]:
+    out: list[str] = []
+    for value in values or ():
+        out.extend(v.strip() for v in value.split(",") if v.strip())
+    return tuple(out)
+
+
+def _parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="lsdae", description="Conformance checker for fmi-ls-dae FMUs.")
+    parser.add_argument("--version", action="version", version=f"lsdae {__version__}")
+    sub = parser.add_subparsers(dest="command", required=True)
+
+    check = sub.add_parser("check", help="check FMUs (.fmu files or unpacked folders)")
+    check.add_argument("paths", nargs="+", metavar="PATH")
+    check.add_argument("--format", action="append", metavar="NAME[:FILE]",
+                       help=f"output format ({', '.join(REPORTER_BY_NAME)}), optionally with a "
+                            "file; repeatable. Default: console")
+    check.add_argument("-o", "--output", metavar="FILE",
+                       help="write the (single) format without a file here")
+    check.add_argument("--select", action="append", metavar="RULES",
+                       help="only these rules: codes, names or code prefixes, comma-separated")
+    check.add_argument("--ignore", action="append", metavar="RULES", help="skip these rules")
+    check.add_argument("--severity", action="append", metavar="RULE=LEVEL",
+                       help="override a rule's severity (info, warning, error)")
+    check.add_argument("--draft", default=None, choices=("auto", *ALL_DRAFTS),
+                       help="which fmi-ls-dae draft to check against (default: auto-detect)")
+    check.add_argument("--no-probes", action="store_true",
+                       help="static checks only: do not load the FMU's binary")
+    check.add_argument("--config", type=Path, metavar="PYPROJECT",
+                       help="read [tool.lsdae] from this file instead of the nearest pyproject")
+    check.add_argument("--color", choices=("auto", "always", "never"), default="auto")
+    check.add_argument("-v", "--verbose", action="store_true", help="log what the engine does")
+
+    rules = sub.add_parser("rules", help="list the rules")
+    rules.add_argument("--format", choices=("text", "markdown"), default="text")
+
+    explain = sub.add_parser("explain", help="show one rule in full")
+    explain.add_argument("rule", metavar="CODE-or-name")
+    return parser
+
+
+def _options(args: argparse.Namespace) -> EngineOptions:
+    try:
+        config = load_config(args.config).values
+    except ConfigError as exc:
+        raise UsageError(str(exc)) from None
+    severity = dict(config.get("severity", {}))
+    for item in args.severity or ():
+        code, sep, level = item.partition("=")
+        if not sep:
+            raise UsageError(f"--severity takes RULE=LEVEL, not {item!r}")
+        severity[code.strip()] = level.strip()
+    for level in severity.values():
+        try:
+            Severity.parse(level)
+        except ValueError as exc:
+            raise UsageError(str(exc)) from None
+    return EngineOptions(
+        select=_split(args.select) or tuple(config.get("select", ())),
+        ignore=_split(args.ignore) or tuple(config.get("ignore", ())),
+        severity=tuple(severity.items()),
+        draft=args.draft or config.get("draft", "auto"),
+        probes=not args.no_probes and bool(config.get("probes", True)),
+    )
+
+
+def _outputs(args: argparse.Namespace) -> list[tuple[str, str | None]]:
+    specs = args.format or ["console"]
+    outputs: list[tuple[str, str | None]] = []
+    for spec in specs:
+        name, sep, file = spec.partition(":")
+        if name not in REPORTER_BY_NAME:
+            raise UsageError(f"unknown format {name!r} (choose from {', '.join(REPORTER_BY_NAME)})")
+        outputs.append((name, file if sep else None))
+    bare = [i for i, (_, f) in enumerate(outputs) if f is None]
+    if args.output:
+        if len(bare) != 1:
+            raise UsageError("-o needs exactly one --format without its own file")
+        outputs[bare[0]] = (outputs[bare[0]][0], args.output)
+    return outputs
+
+
+def _use_color(choice: str, file: str | None) -> bool:
+    if choice == "always":
+        return True
+    if choice == "never" or file is not None or os.environ.get("NO_COLOR"):
+        return False
+    return sys.stdout.isatty()
+
+
+def cmd_check(args: argparse.Namespace) -> int:
+    catalogue = default_catalogue()
+    options = _options(args)
+    outputs = _outputs(args)
+    try:
+        report = check_paths(args.paths, options=options, catalogue=catalogue)
+    except ValueError as exc:  # a bad --select/--ignore pattern
+        raise UsageError(str(exc)) from None
+    failed_write = False
+    for name, file in outputs:
+        text = REPORTER_BY_NAME[name](report, catalogue, color=_use_color(args.color, file))
+        if file is None or file == "-":
+            sys.stdout.write(text)
+            continue
+        try:
+            Path(file).parent.mkdir(parents=True, exist_ok=True)
+            Path(file).write_text(text, encoding="utf-8")
+        except OSError as exc:
+            print(f"lsdae: cannot write {file}: {exc}", file=sys.stderr)
+            failed_write = True
+    if failed_write:
+        return EXIT_USAGE
+    return EXIT_FINDINGS if report.has_at_least(Severity.ERROR) else EXIT_OK
+
+
+def _rule_line(rule: RuleSpec) -> str:
+    return f"{rule.code}  {rule.name:<40} {str(rule.severity):<8} {rule.summary}"
+
+
+def cmd_rules(args: argparse.Namespace) -> int:
+    catalogue = default_catalogue()
+    if args.format == "markdown":
+        print("| code | name | severity | stage | summary |\n|---|---|---|---|---|")
+        for rule in catalogue:
+            print(f"| {rule.code} | `{rule.name}` | {rule.severity} | {rule.stage} | "
+                  f"{rule.summary} |")
+    else:
+        for rule in catalogue:
+            print(_rule_line(rule))
+    return EXIT_OK
+
+
+def explain_text(rule: RuleSpec) -> str:
+    drafts = ", ".join("all drafts" if d == "*" else DRAFT_LABELS.get(d, d) for d in rule.drafts)
+    parts = [
+        f"{rule.code} {rule.name}  ({rule.severity}, {rule.stage} stage)",
+        "", rule.summary, "",
+        f"Applies to: {drafts}",
+        f"Spec:       {rule.spec}",
+    ]
+    if rule.aliases:
+        parts.append(f"Aliases:    {', '.join(rule.aliases)}")
+    parts += ["", "Why it matters:", _indent(rule.rationale), "", "Fails:", _indent(rule.bad),
+              "", "Passes:", _indent(rule.good)]
+    if rule.options:
+        parts += ["", "Options:"] + [f"    {k} = {v!r}" for k, v in rule.options]
+    return "\n".join(parts) + "\n"
+
+
+def _indent(text: str) -> str:
+    return "\n".join(f"    {line}" if line else "" for line in text.splitlines())
+
+
+def cmd_explain(args: argparse.Namespace, catalogue: Catalogue | None = None) -> int:
+    catalogue = catalogue or default_catalogue()
+    rule = catalogue.get(args.rule)
+    if rule is None:
+        raise UsageError(f"no rule {args.rule!r} (see `lsdae rules`)")
+    sys.stdout.write(explain_text(rule))
+    return EXIT_OK
+
+
+COMMANDS = {"check": cmd_check, "rules": cmd_rules, "explain": cmd_explain}
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = _parser()
+    args = parser.parse_args(argv)
+    logging.basicConfig(level=logging.DEBUG if getattr(args, "verbose", False) else logging.ERROR,
+                        format="lsdae: %(levelname)s: %(message)s")
+    try:
+        return COMMANDS[args.command](args)
+    except UsageError as exc:
+        print(f"lsdae: {exc}", file=sys.stderr)
+        return EXIT_USAGE
+    except CatalogueError as exc:
+        print(f"lsdae: the rule catalogue is broken: {exc}", file=sys.stderr)
+        return EXIT_USAGE
+    except KeyboardInterrupt:
+        print("lsdae: interrupted", file=sys.stderr)
+        return EXIT_USAGE
+    except Exception as exc:  # never a bare traceback
+        logging.getLogger(__name__).debug("internal error", exc_info=True)
+        print(f"lsdae: internal error: {type(exc).__name__}: {exc} (run with -v for details)",
+              file=sys.stderr)
+        return EXIT_USAGE
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

@@ -1,0 +1,287 @@
+"""Run the stages on one FMU: archive -> XML -> schema -> static checks (-> probes).
+
+Checks and stages yield plain :class:`Violation` objects; the engine looks their rule up in the
+catalogue, applies the user's selection and severity overrides, groups repeated violations, adds
+the source line, and freezes everything into an :class:`FmuReport`. Nothing here raises for bad
+input: an exception inside a check becomes an ``internal-error`` finding and the run goes on.
+"""
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Iterable, Sequence
+
+from . import __version__
+from .catalogue import Catalogue, RuleSpec, default_catalogue
+from .checks import REGISTRY
+from .context import CheckContext
+from .drafts import UNKNOWN, detect_draft, legacy_violations
+from .findings import Finding, FmuReport, Location, Report, Severity, Violation, evidence
+from .fmu import open_fmu
+from .manifest import MANIFEST, Manifest, read_manifest
+from .model import MODEL_DESCRIPTION, ModelDescription, read_model_description
+from .schemas import validate_manifest, validate_model_description
+from .xmlsafe import parse_xml
+
+log = logging.getLogger(__name__)
+
+STATIC_STAGES = ("static",)
+GROUP_SHOWN = 5
+
+
+@dataclass(frozen=True)
+class EngineOptions:
+    """What the user chose: rule selection, severity overrides, draft, probes."""
+
+    select: tuple[str, ...] = ()
+    ignore: tuple[str, ...] = ()
+    severity: tuple[tuple[str, str], ...] = ()
+    draft: str = "auto"
+    probes: bool = True
+    group_threshold: int = 3
+
+
+class RuleSelection:
+    """The effective rule set: which codes are on, and at which severity."""
+
+    def __init__(self, catalogue: Catalogue, options: EngineOptions):
+        self.catalogue = catalogue
+        selected = {r.code for r in catalogue}
+        if options.select:
+            selected = {r.code for p in options.select for r in self._resolve(p)}
+        for pattern in options.ignore:
+            selected -= {r.code for r in self._resolve(pattern)}
+        self.enabled = frozenset(selected)
+        self.severity: dict[str, Severity] = {r.code: r.severity for r in catalogue}
+        for pattern, level in options.severity:
+            for rule in self._resolve(pattern):
+                self.severity[rule.code] = Severity.parse(level)
+
+    def _resolve(self, pattern: str) -> list[RuleSpec]:
+        rules = self.catalogue.matching(pattern.strip())
+        if not rules:
+            raise ValueError(f"no rule matches {pattern!r} (see `lsdae rules`)")
+        return rules
+
+
+class _Collector:
+    """Accumulates violations per rule and turns them into grouped, located findings."""
+
+    def __init__(self, selection: RuleSelection, texts: dict[str, bytes], threshold: int):
+        self.selection = selection
+        self.texts = texts
+        self.threshold = threshold
+        self.items: list[tuple[RuleSpec, Violation]] = []
+
+    def add(self, rule: RuleSpec, violations: Iterable[Violation]) -> None:
+        for v in violations:
+            target = rule
+            if v.rule and v.rule not in (rule.name, rule.code):
+                target = self.selection.catalogue.get(v.rule) or rule
+            if target.code in self.selection.enabled:
+                self.items.append((target, v))
+
+    def add_stage(self, violations: Iterable[Violation]) -> None:
+        """Violations from loaders and stages, which name their rule themselves."""
+        for v in violations:
+            rule = self.selection.catalogue.get(v.rule or "")
+            if rule is None:
+                rule = self.selection.catalogue["internal-error"]
+                v = replace(v, message=f"unknown rule {v.rule!r}: {v.message}")
+            if rule.code in self.selection.enabled:
+                self.items.append((rule, v))
+
+    def emit(self, rule_name: str, violation: Violation) -> None:
+        self.add_stage([replace(violation, rule=rule_name)])
+
+    def findings(self) -> tuple[Finding, ...]:
+        groups: dict[tuple[str, str, str], list[tuple[RuleSpec, Violation]]] = {}
+        for rule, v in self.items:
+            groups.setdefault((rule.code, v.message, v.location.file or ""), []).append((rule, v))
+        out: list[Finding] = []
+        for members in groups.values():
+            if len(members) > self.threshold:
+                out.append(self._grouped(members))
+            else:
+                out.extend(self._single(rule, v) for rule, v in members)
+        lines = _LineCache(self.texts)
+        out = [replace(f, location=lines.with_snippet(f.location)) for f in out]
+        return tuple(sorted(set(out), key=Finding.sort_key))
+
+    def _single(self, rule: RuleSpec, v: Violation) -> Finding:
+        message = v.message.replace("{subject}", f"'{v.subject}'" if v.subject else "")
+        return Finding(rule.code, rule.name, self.selection.severity[rule.code], message,
+                       v.location, v.evidence, v.subject)
+
+    def _grouped(self, members: list[tuple[RuleSpec, Violation]]) -> Finding:
+        members = sorted(members, key=lambda m: m[1].location.sort_key())
+        rule, first = members[0]
+        subjects = [v.subject for _, v in members if v.subject]
+        shown = ", ".join(f"'{s}'" for s in subjects[:GROUP_SHOWN])
+        more = ", …" if len(subjects) > GROUP_SHOWN else ""
+        if "{subject}" in first.message:
+            message = first.message.replace("{subject}", f"{len(members)} items ({shown}{more})")
+        else:
+            message = f"{first.message} ({len(members)} times)"
+        ev = first.evidence + evidence(
+            count=len(members), subjects=subjects[:20],
+            lines=[v.location.line for _, v in members[:20]])
+        return Finding(rule.code, rule.name, self.selection.severity[rule.code], message,
+                       first.location, ev, None, len(members))
+
+
+class _LineCache:
+    def __init__(self, texts: dict[str, bytes]):
+        self.texts = texts
+        self.lines: dict[str, list[bytes]] = {}
+
+    def with_snippet(self, loc: Location) -> Location:
+        if not loc.file or not loc.line or loc.file not in self.texts:
+            return loc
+        lines = self.lines.setdefault(loc.file, self.texts[loc.file].split(b"\n"))
+        if loc.line > len(lines):
+            return loc
+        text = lines[loc.line - 1].decode("utf-8", "replace").rstrip()
+        return replace(loc, snippet=text[:240])
+
+
+def check_fmu(path: Path, *, options: EngineOptions = EngineOptions(),
+              catalogue: Catalogue | None = None, display_path: str | None = None) -> FmuReport:
+    """Check one FMU (file or folder) and return its frozen report."""
+    catalogue = catalogue or default_catalogue()
+    selection = RuleSelection(catalogue, options)
+    texts: dict[str, bytes] = {}
+    collector = _Collector(selection, texts, options.group_threshold)
+    state = _State()
+    try:
+        _run(Path(path), options, catalogue, selection, collector, texts, state)
+    except Exception as exc:  # a defect of ours: report it, keep everything found so far
+        log.exception("internal error while checking %s", path)
+        collector.emit("internal-error", Violation(
+            f"lsdae failed while checking this FMU: {type(exc).__name__}: {exc}",
+            evidence=evidence(exception=type(exc).__name__)))
+    return FmuReport(
+        path=display_path or str(path), draft=state.draft, findings=collector.findings(),
+        rules_run=tuple(sorted(state.run)), rules_skipped=tuple(sorted(state.skipped)),
+        info=evidence(state.info),
+    )
+
+
+class _State:
+    def __init__(self) -> None:
+        self.draft: str | None = None
+        self.run: set[str] = set()
+        self.skipped: set[tuple[str, str]] = set()
+        self.info: dict[str, object] = {}
+
+
+def _run(path: Path, options: EngineOptions, catalogue: Catalogue, selection: RuleSelection,
+         collector: _Collector, texts: dict[str, bytes], state: _State) -> None:
+    source, violations = open_fmu(path)
+    collector.add_stage(violations)
+    if source is None:
+        return
+    with source:
+        names = tuple(source.names())
+        model = _read_model(source, names, collector, texts)
+        manifest = _read_manifest(source, names, options, collector, texts, state)
+    if model is not None:
+        state.info.update(model_name=model.model_name, fmi_version=model.fmi_version,
+                          variables=len(model.variables))
+    ctx = CheckContext(model=model, manifest=manifest, draft=state.draft, names=names)
+    _run_static(ctx, catalogue, selection, collector, state)
+
+
+def _read(source, name: str, collector: _Collector) -> bytes | None:
+    try:
+        return source.read(name)
+    except Exception as exc:  # the archive layer reports limits; this is a last resort
+        collector.emit("archive-unreadable", Violation(
+            f"cannot read {name}: {exc}", Location(file=name)))
+        return None
+
+
+def _read_model(source, names: Sequence[str], collector: _Collector,
+                texts: dict[str, bytes]) -> ModelDescription | None:
+    if MODEL_DESCRIPTION not in names:
+        collector.emit("model-description-missing", Violation(
+            "the FMU has no modelDescription.xml at its root", Location(file=MODEL_DESCRIPTION)))
+        return None
+    data = _read(source, MODEL_DESCRIPTION, collector)
+    if data is None:
+        return None
+    texts[MODEL_DESCRIPTION] = data
+    tree, violations = parse_xml(data, file=MODEL_DESCRIPTION)
+    collector.add_stage(violations)
+    if tree is None:
+        return None
+    collector.add_stage(validate_model_description(tree))
+    return read_model_description(tree, file=MODEL_DESCRIPTION)
+
+
+def _read_manifest(source, names: Sequence[str], options: EngineOptions, collector: _Collector,
+                   texts: dict[str, bytes], state: _State) -> Manifest | None:
+    if MANIFEST not in names:
+        collector.emit("manifest-missing", Violation(
+            f"no {MANIFEST}: this is an ordinary Model Exchange FMU, the DAE rules are skipped",
+            Location(file=MANIFEST)))
+        return None
+    data = _read(source, MANIFEST, collector)
+    if data is None:
+        return None
+    texts[MANIFEST] = data
+    tree, violations = parse_xml(data, file=MANIFEST)
+    collector.add_stage(violations)
+    if tree is None:
+        state.info["manifest"] = "unreadable: nothing to check or probe"
+        return None
+    draft = detect_draft(tree.getroot()) if options.draft == "auto" else options.draft
+    state.draft = draft
+    if draft == UNKNOWN:
+        root = tree.getroot()
+        collector.emit("draft-unrecognised", Violation(
+            f"the manifest's root element <{root.tag}> matches no known fmi-ls-dae draft",
+            Location(file=MANIFEST, line=root.sourceline)))
+        return None
+    collector.add_stage(validate_manifest(tree, draft, file=MANIFEST))
+    collector.add_stage(legacy_violations(tree.getroot(), draft, file=MANIFEST))
+    return read_manifest(tree, draft=draft, file=MANIFEST)
+
+
+def _run_static(ctx: CheckContext, catalogue: Catalogue, selection: RuleSelection,
+                collector: _Collector, state: _State) -> None:
+    have = {"model-description": ctx.model is not None, "manifest": ctx.manifest is not None}
+    for rule in catalogue:
+        if rule.stage not in STATIC_STAGES or rule.code not in selection.enabled:
+            continue
+        missing = [n for n in rule.needs if not have.get(n, False)]
+        if missing:
+            state.skipped.add((rule.code, f"no {missing[0]}"))
+            continue
+        if ctx.manifest is not None and not rule.applies_to(ctx.draft):
+            state.skipped.add((rule.code, f"does not apply to draft {ctx.draft}"))
+            continue
+        check = REGISTRY.get(rule.code)
+        if check is None:
+            state.skipped.add((rule.code, "not implemented"))
+            continue
+        state.run.add(rule.code)
+        try:
+            collector.add(rule, list(check(ctx, **rule.option_values)))
+        except Exception as exc:
+            log.exception("rule %s failed", rule.code)
+            collector.emit("internal-error", Violation(
+                f"rule {rule.code} {rule.name} failed: {type(exc).__name__}: {exc}",
+                evidence=evidence(rule=rule.code)))
+
+
+def check_paths(paths: Sequence[Path | str], *, options: EngineOptions = EngineOptions(),
+                catalogue: Catalogue | None = None) -> Report:
+    catalogue = catalogue or default_catalogue()
+    RuleSelection(catalogue, options)  # fail early on a bad --select / --ignore
+    fmus = tuple(check_fmu(Path(p), options=options, catalogue=catalogue, display_path=str(p))
+                 for p in paths)
+    return Report(tool_version=__version__, fmus=fmus, options=evidence(
+        draft=options.draft, select=list(options.select), ignore=list(options.ignore),
+        severity=[f"{k}={v}" for k, v in options.severity], probes=options.probes))

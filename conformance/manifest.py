@@ -1,0 +1,141 @@
+"""The fmi-ls-dae manifest as a frozen dataclass, read from any draft shape.
+
+Every shape in the wild (see conformance/drafts.py) is normalised into one :class:`Manifest`:
+element names are compared by local name, so namespaced legacy manifests read the same as
+alpha.1 ones; a legacy ``<Residual><Formulation .../></Residual>`` becomes a Residual
+:class:`~conformance.model.Unknown` whose ``formulations`` counts the Formulation children.
+The shape itself is reported by the draft rules; the semantic rules then run on this model.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from lxml import etree
+
+from .drafts import LS_NAMESPACE
+from .model import Unknown, parse_uint, parse_unknown
+
+MANIFEST = "extra/org.fmi-standard.fmi-ls-dae/fmi-ls-manifest.xml"
+LS_ATTRIBUTES = ("fmi-ls-name", "fmi-ls-version", "fmi-ls-description")
+ENABLE_ELEMENTS = ("EnableDAEParameter", "EnableDAE")
+
+
+@dataclass(frozen=True, slots=True)
+class VrRef:
+    """A manifest element that points at a variable: enable parameter or algebraic variable."""
+
+    vr: int | None
+    line: int | None
+    path: str
+    element: str                     # EnableDAEParameter, EnableDAE, @enableDAEModeVariable, ...
+    raw: str | None = None           # the valueReference text when it is not an integer
+    name: str | None = None          # when the variable is given by name (an old draft)
+    extra: tuple[tuple[str, str], ...] = ()   # attributes beyond valueReference
+
+
+@dataclass(frozen=True)
+class Manifest:
+    file: str
+    root_name: str
+    root_namespace: str | None
+    root_line: int | None
+    ls_name: str | None
+    ls_version: str | None
+    ls_description: str | None
+    unqualified_ls_attributes: tuple[str, ...]
+    enables: tuple[VrRef, ...]
+    algebraic: tuple[VrRef, ...]
+    algebraic_line: int | None
+    structure: tuple[Unknown, ...]
+    has_model_structure: bool
+    is_dae_fmu: str | None
+    draft: str
+
+    @property
+    def enable(self) -> VrRef | None:
+        return self.enables[0] if self.enables else None
+
+    @property
+    def residuals(self) -> tuple[Unknown, ...]:
+        return tuple(u for u in self.structure if u.kind == "Residual")
+
+    def unknowns(self, kind: str) -> tuple[Unknown, ...]:
+        return tuple(u for u in self.structure if u.kind == kind)
+
+
+def _local(el: etree._Element) -> str:
+    return etree.QName(el).localname if isinstance(el.tag, str) else ""
+
+
+def _elements(el: etree._Element | None) -> list[etree._Element]:
+    return [] if el is None else [c for c in el if isinstance(c.tag, str)]
+
+
+def _ref(el: etree._Element, path: str) -> VrRef:
+    raw = el.get("valueReference")
+    vr = parse_uint(raw)
+    extra = tuple(sorted((etree.QName(k).localname, v) for k, v in el.attrib.items()
+                         if k != "valueReference"))
+    return VrRef(vr=vr, line=el.sourceline, path=path, element=_local(el),
+                 raw=raw if vr is None else None, extra=extra)
+
+
+def read_manifest(tree: etree._ElementTree, *, draft: str, file: str = MANIFEST) -> Manifest:
+    """Normalise a manifest tree of any known shape; never raises on odd content."""
+    root = tree.getroot()
+    rname = _local(root)
+    qualified = {a: root.get(f"{{{LS_NAMESPACE}}}{a}") for a in LS_ATTRIBUTES}
+    unqualified = tuple(a for a in LS_ATTRIBUTES if root.get(a) is not None)
+
+    enables: list[VrRef] = []
+    algebraic: list[VrRef] = []
+    algebraic_line = None
+    structure: list[Unknown] = []
+    has_ms = False
+    for child in _elements(root):
+        tag = _local(child)
+        if tag in ENABLE_ELEMENTS:
+            enables.append(_ref(child, f"/{rname}/{tag}"))
+        elif tag == "AlgebraicVariables":
+            algebraic_line = child.sourceline
+            for i, av in enumerate(_elements(child), 1):
+                algebraic.append(_ref(av, f"/{rname}/AlgebraicVariables/{_local(av)}[{i}]"))
+        elif tag == "ModelStructure":
+            has_ms = True
+            structure.extend(_structure(child, rname, file))
+    by_name = root.get("enableDAEModeVariable")
+    if by_name is not None:
+        enables.append(VrRef(vr=parse_uint(by_name), line=root.sourceline,
+                             path=f"/{rname}/@enableDAEModeVariable",
+                             element="@enableDAEModeVariable",
+                             name=None if by_name.strip().isdigit() else by_name))
+    ns = etree.QName(root).namespace if isinstance(root.tag, str) else None
+    return Manifest(
+        file=file, root_name=rname, root_namespace=ns, root_line=root.sourceline,
+        ls_name=qualified["fmi-ls-name"], ls_version=qualified["fmi-ls-version"],
+        ls_description=qualified["fmi-ls-description"], unqualified_ls_attributes=unqualified,
+        enables=tuple(enables), algebraic=tuple(algebraic), algebraic_line=algebraic_line,
+        structure=tuple(structure), has_model_structure=has_ms,
+        is_dae_fmu=root.get("isDaeFmu"), draft=draft,
+    )
+
+
+def _structure(ms: etree._Element, rname: str, file: str) -> list[Unknown]:
+    out: list[Unknown] = []
+    counters: dict[str, int] = {}
+    for el in _elements(ms):
+        kind = _local(el)
+        counters[kind] = counters.get(kind, 0) + 1
+        path = f"/{rname}/ModelStructure/{kind}[{counters[kind]}]"
+        formulations = [f for f in _elements(el) if _local(f) == "Formulation"]
+        if kind == "Residual" and formulations:
+            first = formulations[0]
+            unknown = parse_unknown(first, kind, file, f"{path}/Formulation[1]")
+            out.append(Unknown(**{**_fields(unknown), "formulations": len(formulations)}))
+        else:
+            out.append(parse_unknown(el, kind, file, path))
+    return out
+
+
+def _fields(u: Unknown) -> dict:
+    return {name: getattr(u, name) for name in Unknown.__dataclass_fields__}

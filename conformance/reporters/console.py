@@ -1,0 +1,60 @@
+"""Console output in the style of compiler diagnostics, coloured only when asked to."""
+from __future__ import annotations
+
+from ..catalogue import Catalogue
+from ..drafts import DRAFT_LABELS
+from ..findings import Finding, FmuReport, Report, Severity
+
+_COLOURS = {Severity.ERROR: "\033[1;31m", Severity.WARNING: "\033[1;33m",
+            Severity.INFO: "\033[1;36m"}
+_BOLD, _DIM, _RESET = "\033[1m", "\033[2m", "\033[0m"
+
+
+def render(report: Report, catalogue: Catalogue | None = None, *, color: bool = False) -> str:
+    out: list[str] = []
+    for fmu in report.fmus:
+        out.extend(_fmu(fmu, color))
+    errors = sum(f.count(Severity.ERROR) for f in report.fmus)
+    warnings = sum(f.count(Severity.WARNING) for f in report.fmus)
+    out.append(f"checked {len(report.fmus)} FMU{'s' if len(report.fmus) != 1 else ''}: "
+               f"{_plural(errors, 'error')}, {_plural(warnings, 'warning')}")
+    return "\n".join(out) + "\n"
+
+
+def _plural(n: int, word: str) -> str:
+    return f"{n} {word}{'' if n == 1 else 's'}"
+
+
+def _paint(text: str, code: str, color: bool) -> str:
+    return f"{code}{text}{_RESET}" if color else text
+
+
+def _fmu(fmu: FmuReport, color: bool) -> list[str]:
+    lines: list[str] = []
+    for finding in fmu.findings:
+        lines.extend(_finding(fmu, finding, color))
+        lines.append("")
+    draft = DRAFT_LABELS.get(fmu.draft, fmu.draft) if fmu.draft else "no fmi-ls-dae manifest"
+    summary = (f"{fmu.path}: {draft}; {_plural(fmu.count(Severity.ERROR), 'error')}, "
+               f"{_plural(fmu.count(Severity.WARNING), 'warning')}, "
+               f"{fmu.count(Severity.INFO)} info")
+    lines.append(_paint(summary, _BOLD, color))
+    lines.append("")
+    return lines
+
+
+def _finding(fmu: FmuReport, f: Finding, color: bool) -> list[str]:
+    head = f"{f.severity}[{f.code} {f.name}]"
+    lines = [f"{_paint(head, _COLOURS[f.severity], color)}: {f.message}"]
+    loc = f.location
+    if loc.file:
+        where = f"{fmu.path}!{loc.file}" + (f":{loc.line}" if loc.line else "")
+        lines.append(f"  {_paint('-->', _DIM, color)} {where}")
+        if loc.snippet is not None and loc.line:
+            gutter = " " * len(str(loc.line))
+            lines.append(f" {gutter} |")
+            lines.append(f" {loc.line} | {loc.snippet.strip()}")
+            lines.append(f" {gutter} |")
+    else:
+        lines.append(f"  {_paint('-->', _DIM, color)} {fmu.path}")
+    return lines

@@ -1,0 +1,56 @@
+"""The complete machine-readable report (schema version 1, documented in docs/json-report.md)."""
+from __future__ import annotations
+
+import json
+from typing import Any
+
+from ..catalogue import Catalogue
+from ..drafts import DRAFT_LABELS
+from ..findings import Finding, FmuReport, Report, Severity
+
+SCHEMA_VERSION = 1
+
+
+def _plain(value: Any) -> Any:
+    if isinstance(value, tuple):
+        if value and all(isinstance(v, tuple) and len(v) == 2 and isinstance(v[0], str)
+                         for v in value):
+            return {k: _plain(v) for k, v in value}
+        return [_plain(v) for v in value]
+    if isinstance(value, float) and (value != value or value in (float("inf"), float("-inf"))):
+        return repr(value)
+    return value
+
+
+def finding_dict(f: Finding) -> dict[str, Any]:
+    loc = f.location
+    return {
+        "code": f.code, "name": f.name, "severity": str(f.severity), "message": f.message,
+        "file": loc.file, "line": loc.line, "column": loc.column, "path": loc.path,
+        "subject": f.subject, "count": f.count, "evidence": _plain(f.evidence),
+    }
+
+
+def fmu_dict(fmu: FmuReport) -> dict[str, Any]:
+    return {
+        "path": fmu.path,
+        "draft": fmu.draft,
+        "draft_label": DRAFT_LABELS.get(fmu.draft) if fmu.draft else None,
+        "summary": {str(s): fmu.count(s) for s in (Severity.ERROR, Severity.WARNING,
+                                                   Severity.INFO)},
+        "info": _plain(fmu.info),
+        "findings": [finding_dict(f) for f in fmu.findings],
+        "rules_run": list(fmu.rules_run),
+        "rules_skipped": [{"code": c, "reason": r} for c, r in fmu.rules_skipped],
+    }
+
+
+def report_dict(report: Report) -> dict[str, Any]:
+    return {
+        "tool": "lsdae", "version": report.tool_version, "schema_version": SCHEMA_VERSION,
+        "options": _plain(report.options), "fmus": [fmu_dict(f) for f in report.fmus],
+    }
+
+
+def render(report: Report, catalogue: Catalogue | None = None, **_: Any) -> str:
+    return json.dumps(report_dict(report), indent=2, sort_keys=False, ensure_ascii=False) + "\n"

@@ -1,0 +1,73 @@
+"""Engine behaviour: selection, severity overrides, grouping, skipping, internal errors."""
+from __future__ import annotations
+
+import pytest
+
+from conformance import engine
+from conformance.checks import REGISTRY
+from conformance.engine import EngineOptions, check_fmu
+from conformance.findings import Severity, Violation
+from tests.fixturekit import Case, FIXTURES, materialise
+
+
+def _scene(tmp_path, **spec):
+    case = Case("TEST", "pass", FIXTURES, {"base": "HelloWorldDAE", **spec})
+    return materialise(case, tmp_path)
+
+
+def test_internal_error_is_a_finding(tmp_path, monkeypatch):
+    code = sorted(REGISTRY)[0]
+
+    def broken(ctx, **_):
+        raise ZeroDivisionError("boom")
+        yield  # pragma: no cover
+
+    monkeypatch.setitem(engine.REGISTRY, code, broken)
+    report = check_fmu(_scene(tmp_path), options=EngineOptions(probes=False))
+    errors = [f for f in report.findings if f.name == "internal-error"]
+    assert len(errors) == 1 and dict(errors[0].evidence)["rule"] == code
+    assert code in report.rules_run  # the other rules still ran
+    assert len(report.rules_run) > 1
+
+
+def test_missing_manifest_skips_dae_rules_not_fails(tmp_path):
+    report = check_fmu(_scene(tmp_path, remove=["manifest"]), options=EngineOptions(probes=False))
+    assert {f.code for f in report.findings} == {"DAE091"}
+    assert report.rules_skipped, "DAE rules should be listed as skipped"
+    assert all(reason == "no manifest" for _, reason in report.rules_skipped)
+
+
+def test_grouping_many_identical_violations(tmp_path, monkeypatch):
+    code = sorted(REGISTRY)[0]
+
+    def many(ctx, **_):
+        for i in range(200):
+            yield Violation("variable {subject} is odd", subject=f"v{i}")
+
+    monkeypatch.setitem(engine.REGISTRY, code, many)
+    report = check_fmu(_scene(tmp_path), options=EngineOptions(probes=False, select=(code,)))
+    assert len(report.findings) == 1
+    finding = report.findings[0]
+    assert finding.count == 200
+    assert dict(finding.evidence)["subjects"][:2] == ("v0", "v1")
+
+
+def test_select_ignore_and_severity_override(tmp_path):
+    path = _scene(tmp_path, remove=["manifest"])
+    ignored = check_fmu(path, options=EngineOptions(probes=False, ignore=("manifest-missing",)))
+    assert ignored.findings == ()
+    raised = check_fmu(path, options=EngineOptions(probes=False,
+                                                   severity=(("DAE091", "error"),)))
+    assert [f.severity for f in raised.findings] == [Severity.ERROR]
+
+
+def test_unknown_selection_is_a_usage_error(tmp_path):
+    with pytest.raises(ValueError):
+        engine.check_paths([_scene(tmp_path)], options=EngineOptions(select=("NOPE999",)))
+
+
+def test_report_is_deterministic(tmp_path):
+    path = _scene(tmp_path)
+    a = check_fmu(path, options=EngineOptions(probes=False))
+    b = check_fmu(path, options=EngineOptions(probes=False))
+    assert a == b

@@ -16,7 +16,7 @@ from . import __version__
 from .catalogue import Catalogue, RuleSpec, default_catalogue
 from .checks import REGISTRY
 from .context import CheckContext
-from .drafts import UNKNOWN, detect_draft, legacy_violations
+from .drafts import UNKNOWN, detect_draft, legacy_violations, unrecognised_violations
 from .findings import Finding, FmuReport, Location, Report, Severity, Violation, evidence
 from .fmu import open_fmu
 from .manifest import MANIFEST, Manifest, read_manifest
@@ -239,10 +239,7 @@ def _read_manifest(source, names: Sequence[str], options: EngineOptions, collect
     draft = detect_draft(tree.getroot()) if options.draft == "auto" else options.draft
     state.draft = draft
     if draft == UNKNOWN:
-        root = tree.getroot()
-        collector.emit("draft-unrecognised", Violation(
-            f"the manifest's root element <{root.tag}> matches no known fmi-ls-dae draft",
-            Location(file=MANIFEST, line=root.sourceline)))
+        collector.add_stage(unrecognised_violations(tree.getroot(), file=MANIFEST))
         return None
     collector.add_stage(validate_manifest(tree, draft, file=MANIFEST))
     collector.add_stage(legacy_violations(tree.getroot(), draft, file=MANIFEST))

@@ -1,0 +1,183 @@
+"""Static checks: the basic rules of the manifest's ``<Residual>`` elements (DAE-31 to DAE-33).
+
+A residual is a value the FMU computes and the importer drives to zero by choosing the algebraic
+variables. These rules check that each Residual names a distinct continuous floating-point
+variable that the FMU computes, and that there are as many residual elements as algebraic ones,
+so that the Jacobian of the residuals with respect to the algebraic variables can be square.
+The dependency structure (matching, knowns) is checked by the structure family (DAE420 and up).
+
+Every faulty Residual is reported by exactly one rule: unresolved entries only as unresolved,
+repeats only as repeats, a variable that is also an algebraic variable only by the algebraic
+rules (algebraic-is-residual and the rest), and otherwise type and variability before role.
+Legacy ``<Residual><Formulation/>...</Residual>`` elements arrive here as one Residual each
+(see conformance/manifest.py), so a higher-index constraint counts once.
+"""
+from __future__ import annotations
+
+import logging
+from collections.abc import Iterator
+
+from ..context import Check, CheckContext
+from ..findings import Location, Violation, evidence
+from ..manifest import Manifest, VrRef
+from ..model import ModelDescription, Unknown, Variable
+from .algebraic import continuous_states, element_count, resolved_vrs
+
+log = logging.getLogger(__name__)
+
+# A residual with one of these causalities is a value the importer sets, not one the FMU
+# computes. Parameters are left out on purpose: their variability is fixed or tunable (MV-10),
+# so residual-not-float-continuous reports them.
+SET_BY_IMPORTER = frozenset({"input", "independent"})
+
+NOT_FLOAT_CONTINUOUS = "not-float-continuous"
+STATE_OR_INPUT = "state-derivative-or-input"
+
+
+def residual_problem(var: Variable, *, states: frozenset[int]) -> str | None:
+    """The first reason ``var`` cannot be a residual, or None if it can."""
+    if not var.is_float or var.variability != "continuous":
+        return NOT_FLOAT_CONTINUOUS
+    if var.vr in states or var.derivative is not None or var.causality in SET_BY_IMPORTER:
+        return STATE_OR_INPUT
+    return None
+
+
+def _listed(model: ModelDescription, manifest: Manifest) -> Iterator[tuple[Unknown, Variable]]:
+    """The first listing of each resolvable residual that is not also an algebraic variable."""
+    algebraic = resolved_vrs(model, manifest.algebraic)
+    seen: set[int] = set()
+    for res in manifest.residuals:
+        if res.vr is None or res.vr not in model.by_vr or res.vr in seen:
+            continue
+        seen.add(res.vr)
+        if res.vr not in algebraic:  # else the algebraic rules explain it
+            yield res, model.by_vr[res.vr]
+
+
+def _classified(ctx: CheckContext, wanted: str) -> Iterator[tuple[Unknown, Variable]]:
+    model, manifest = ctx.model, ctx.manifest
+    if model is None or manifest is None:
+        return
+    states = continuous_states(model, manifest)
+    for res, var in _listed(model, manifest):
+        if residual_problem(var, states=states) == wanted:
+            yield res, var
+
+
+def _at(res: Unknown) -> Location:
+    return Location(file=res.file, line=res.line, path=res.path)
+
+
+def _facts(var: Variable, res: Unknown) -> dict:
+    return {"value_reference": var.vr, "type": var.type, "causality": var.causality,
+            "variability": var.variability, "listed_at_line": res.line}
+
+
+def residual_unknown_vr(ctx: CheckContext) -> Iterator[Violation]:
+    """DAE-31: every Residual names an existing variable by an integer value reference."""
+    if ctx.model is None or ctx.manifest is None:
+        return
+    for res in ctx.manifest.residuals:
+        if res.vr is None:
+            yield Violation(
+                "a Residual has no valueReference, or one that is not an unsigned integer; give "
+                "the valueReference of the variable that holds the residual",
+                _at(res), evidence(value_reference=None, reason="missing or not an integer"))
+        elif res.vr not in ctx.model.by_vr:
+            yield Violation(
+                "Residual valueReference {subject} names no variable of modelDescription.xml; "
+                "use the valueReference of the Float64 variable that holds the residual",
+                _at(res), evidence(value_reference=res.vr, reason="no such variable"),
+                subject=str(res.vr))
+
+
+def residual_duplicate(ctx: CheckContext) -> Iterator[Violation]:
+    """DAE-31: no two Residual elements name the same variable."""
+    if ctx.model is None or ctx.manifest is None:
+        return
+    first: dict[int, Unknown] = {}
+    for res in ctx.manifest.residuals:
+        if res.vr is None or res.vr not in ctx.model.by_vr:
+            continue  # reported by residual-unknown-vr
+        if res.vr not in first:
+            first[res.vr] = res
+            continue
+        yield Violation(
+            "residual {subject} is listed in more than one Residual element; list each "
+            "residual once",
+            _at(res), evidence(value_reference=res.vr, first_listed_at_line=first[res.vr].line),
+            subject=ctx.model.by_vr[res.vr].name)
+
+
+def residual_not_float_continuous(ctx: CheckContext) -> Iterator[Violation]:
+    """DAE-32: a residual is a Float32/Float64 variable with variability continuous."""
+    for res, var in _classified(ctx, NOT_FLOAT_CONTINUOUS):
+        yield Violation(
+            "residual {subject} is not a continuous Float32 or Float64 variable; the importer "
+            "reads residuals with fmi3GetFloat64/32 at every solver iteration, so declare it "
+            "as a continuous floating-point variable",
+            Location(file=ctx.model.file if ctx.model else None, line=var.line, path=var.path),
+            evidence(_facts(var, res)), subject=var.name)
+
+
+def residual_is_state_derivative_or_input(ctx: CheckContext) -> Iterator[Violation]:
+    """DAE-32: a residual is not a state, a state derivative, an input or the independent one."""
+    for res, var in _classified(ctx, STATE_OR_INPUT):
+        if var.causality in SET_BY_IMPORTER:
+            role = var.causality
+        else:
+            role = "state derivative" if var.derivative is not None else "continuous state"
+        yield Violation(
+            "residual {subject} is a continuous state, a state derivative, an input or the "
+            "independent variable; a residual must be a local or output variable that the FMU "
+            "computes from the algebraic variables",
+            _at(res), evidence(_facts(var, res), role=role), subject=var.name)
+
+
+def residual_count_mismatch(ctx: CheckContext) -> Iterator[Violation]:
+    """DAE-33: the residuals and the algebraic variables have the same number of elements."""
+    if ctx.model is None or ctx.manifest is None:
+        return
+    model, manifest = ctx.model, ctx.manifest
+    sides = []
+    refs: tuple[VrRef, ...] | tuple[Unknown, ...]
+    for refs in (manifest.algebraic, manifest.residuals):
+        variables: dict[int, Variable] = {}
+        for ref in refs:
+            if ref.vr is None or ref.vr not in model.by_vr or ref.vr in variables:
+                # An unresolved entry has no size, and with a repeat it is unclear whether an
+                # entry is extra or stands for a missing one: the unknown-vr and duplicate
+                # rules explain those, and the count is judged once they are fixed.
+                return
+            variables[ref.vr] = model.by_vr[ref.vr]
+        sizes = [element_count(model, v) for v in variables.values()]
+        known = [s for s in sizes if s is not None]
+        if len(known) != len(sizes):
+            log.debug("residual-count-mismatch skipped: an array size is not known statically")
+            return
+        sides.append((sum(known), [v.name for v in variables.values()]))
+    (n_alg, alg_names), (n_res, res_names) = sides
+    if n_alg == n_res:
+        return
+    if manifest.algebraic_line is not None:
+        where = Location(file=manifest.file, line=manifest.algebraic_line,
+                         path=f"/{manifest.root_name}/AlgebraicVariables")
+    else:
+        first = manifest.residuals[0]
+        where = Location(file=manifest.file, line=first.line, path=first.path)
+    yield Violation(
+        f"the manifest has {n_res} residual element(s) for {n_alg} algebraic variable "
+        "element(s); the Jacobian of the residuals with respect to the algebraic variables "
+        "cannot be square, so list one residual per algebraic variable",
+        where, evidence(residual_count=n_res, algebraic_count=n_alg, residuals=res_names,
+                        algebraic_variables=alg_names))
+
+
+CHECKS: dict[str, Check] = {
+    "DAE401": residual_unknown_vr,
+    "DAE402": residual_duplicate,
+    "DAE403": residual_not_float_continuous,
+    "DAE404": residual_is_state_derivative_or_input,
+    "DAE405": residual_count_mismatch,
+}

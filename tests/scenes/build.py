@@ -1,0 +1,237 @@
+"""Build the lsdae test-scene FMUs from tests/scenes/<Name>/.
+
+Each scene folder holds ``model.c`` (plus optional model-specific ``*.c``/``*.h``),
+``modelDescription.xml`` and ``fmi-ls-manifest.xml``.  The C framework in
+``tests/scenes/common/`` is compiled together with the model into
+``binaries/<platform-tuple>/<modelIdentifier>.<ext>`` and zipped with the two XML
+files into ``<Name>.fmu``.
+
+Results are cached by a hash of every input (sources, XML, defines, compiler and
+its version, FMI headers, this file).  The cache lives in ``<repo>/.cache/scenes``
+unless ``cache_dir`` or the environment variable ``LSDAE_SCENE_CACHE`` says
+otherwise.  Builds write into a private temporary directory inside the cache and
+publish with an atomic rename, so concurrent builds (two pytest processes) are safe.
+
+Command line::
+
+    python -m tests.scenes.build SimpleDAE Robertson --out DIR [-D DEFECT_X ...]
+"""
+
+from __future__ import annotations
+
+import argparse
+import functools
+import hashlib
+import os
+import platform
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+import xml.etree.ElementTree as ET
+import zipfile
+from pathlib import Path
+from typing import Sequence
+
+SCENES_DIR = Path(__file__).resolve().parent
+REPO_ROOT = SCENES_DIR.parent.parent
+COMMON_DIR = SCENES_DIR / "common"
+DEFAULT_CACHE_DIR = REPO_ROOT / ".cache" / "scenes"
+CACHE_ENV_VAR = "LSDAE_SCENE_CACHE"
+MANIFEST_ENTRY = "extra/org.fmi-standard.fmi-ls-dae/fmi-ls-manifest.xml"
+CFLAGS = ("-std=c99", "-O2", "-Wall", "-Wextra", "-pedantic", "-shared", "-fPIC",
+          "-fvisibility=hidden")
+_ZIP_DATE = (1980, 1, 1, 0, 0, 0)  # fixed timestamps: reproducible archives
+_DEFINE_RE = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*(=.*)?$")
+
+
+class SceneBuildError(RuntimeError):
+    """The scene does not exist or the C compiler failed."""
+
+
+def scene_names() -> list[str]:
+    """All scene folders (those with a model.c and a modelDescription.xml)."""
+    return sorted(p.name for p in SCENES_DIR.iterdir()
+                  if (p / "model.c").is_file() and (p / "modelDescription.xml").is_file())
+
+
+def scene_xml_dir(name: str) -> Path:
+    """Folder holding the scene's modelDescription.xml and fmi-ls-manifest.xml."""
+    path = SCENES_DIR / name
+    if name not in scene_names():
+        raise SceneBuildError(f"unknown scene {name!r} (known: {', '.join(scene_names())})")
+    return path
+
+
+def platform_tuple() -> str:
+    """FMI 3 platform tuple of the host, e.g. ``x86_64-linux``."""
+    machine = platform.machine().lower()
+    arch = {"x86_64": "x86_64", "amd64": "x86_64", "aarch64": "aarch64", "arm64": "aarch64",
+            "i386": "x86", "i686": "x86", "x86": "x86", "armv7l": "aarch32"}.get(machine, machine)
+    if sys.platform.startswith("linux"):
+        system = "linux"
+    elif sys.platform == "darwin":
+        system = "darwin"
+    elif sys.platform in ("win32", "cygwin"):
+        system = "windows"
+    else:
+        system = sys.platform
+    return f"{arch}-{system}"
+
+
+def shared_library_extension() -> str:
+    return {"darwin": ".dylib", "win32": ".dll", "cygwin": ".dll"}.get(sys.platform, ".so")
+
+
+def fmi_headers_dir() -> Path:
+    """The FMI 3 C headers shipped with fmpy."""
+    import fmpy
+
+    return Path(fmpy.__file__).resolve().parent / "c-code"
+
+
+def compiler() -> str:
+    return os.environ.get("CC", "cc")
+
+
+@functools.lru_cache(maxsize=None)
+def compiler_version(cc: str) -> str:
+    try:
+        proc = subprocess.run([cc, "--version"], capture_output=True, text=True, check=False)
+    except OSError as exc:
+        raise SceneBuildError(f"C compiler {cc!r} not found: {exc}") from exc
+    return proc.stdout + proc.stderr
+
+
+def _normalize_defines(defines: Sequence[str]) -> list[str]:
+    result = []
+    for d in defines:
+        d = d[2:] if d.startswith("-D") else d
+        if not _DEFINE_RE.match(d):
+            raise SceneBuildError(f"not a valid preprocessor define: {d!r}")
+        result.append(d)
+    return result
+
+
+def _source_files(name: str) -> list[Path]:
+    scene = scene_xml_dir(name)
+    files = [p for p in COMMON_DIR.iterdir() if p.suffix in (".c", ".h")]
+    files += [p for p in scene.iterdir() if p.suffix in (".c", ".h", ".xml")]
+    return sorted(files)
+
+
+def _xml_info(md_path: Path) -> tuple[str, str]:
+    """(modelIdentifier of ModelExchange, instantiationToken)."""
+    root = ET.parse(md_path).getroot()
+    me = root.find("ModelExchange")
+    if me is None or not me.get("modelIdentifier"):
+        raise SceneBuildError(f"{md_path}: no <ModelExchange modelIdentifier=...>")
+    token = root.get("instantiationToken", "")
+    if not token or any(ch in token for ch in '"\\\n'):
+        raise SceneBuildError(f"{md_path}: unusable instantiationToken {token!r}")
+    return me.get("modelIdentifier"), token
+
+
+def _cache_key(name: str, defines: list[str], cc: str) -> str:
+    h = hashlib.sha256()
+
+    def feed(label: str, data: bytes) -> None:
+        h.update(f"{label}\0{len(data)}\0".encode())
+        h.update(data)
+
+    feed("scene", name.encode())
+    feed("build.py", Path(__file__).read_bytes())
+    for path in _source_files(name):
+        feed(str(path.relative_to(SCENES_DIR)), path.read_bytes())
+    for header in sorted(fmi_headers_dir().glob("fmi3*.h")):
+        feed(header.name, header.read_bytes())
+    feed("defines", "\n".join(defines).encode())
+    feed("cc", cc.encode())
+    feed("cc-version", compiler_version(cc).encode())
+    feed("platform", platform_tuple().encode())
+    return h.hexdigest()
+
+
+def _compile(name: str, defines: list[str], cc: str, token: str, library: Path) -> str:
+    scene = scene_xml_dir(name)
+    sources = [COMMON_DIR / "fmi3_framework.c"] + sorted(scene.glob("*.c"))
+    cmd = [cc, *CFLAGS, f"-I{COMMON_DIR}", f"-I{scene}", f"-I{fmi_headers_dir()}",
+           f'-DFMU_INSTANTIATION_TOKEN="{token}"', *[f"-D{d}" for d in defines],
+           *map(str, sources), "-o", str(library), "-lm"]
+    proc = subprocess.run(cmd, capture_output=True, text=True, check=False)
+    if proc.returncode != 0:
+        raise SceneBuildError(f"compiling scene {name} failed:\n{' '.join(cmd)}\n{proc.stderr}")
+    return proc.stderr
+
+
+def _zip_entry(zf: zipfile.ZipFile, arcname: str, data: bytes) -> None:
+    info = zipfile.ZipInfo(arcname, date_time=_ZIP_DATE)
+    info.compress_type = zipfile.ZIP_DEFLATED
+    info.external_attr = 0o644 << 16
+    zf.writestr(info, data)
+
+
+def build_scene(name: str, *, defines: Sequence[str] = (), cache_dir: Path | None = None) -> Path:
+    """Build (or fetch from the cache) the FMU of scene ``name``; returns its path.
+
+    ``defines`` are preprocessor macros (``"DEFECT_X"``, ``"N=3"`` or ``"-DDEFECT_X"``)
+    used to build deliberately defective variants.  The returned file is named
+    ``<name>.fmu`` and lives in a cache folder specific to all inputs; next to it,
+    ``build.log`` holds the compiler's diagnostics (empty for a clean build).
+    """
+    defines = _normalize_defines(defines)
+    if cache_dir is None:
+        cache_dir = Path(os.environ.get(CACHE_ENV_VAR) or DEFAULT_CACHE_DIR)
+    cache_dir = Path(cache_dir)
+    cc = compiler()
+    key = _cache_key(name, defines, cc)
+    out_dir = cache_dir / f"{name}-{key[:20]}"
+    fmu = out_dir / f"{name}.fmu"
+    if fmu.is_file():
+        return fmu
+
+    scene = scene_xml_dir(name)
+    model_identifier, token = _xml_info(scene / "modelDescription.xml")
+    out_dir.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory(dir=out_dir, prefix=".build-") as tmp:
+        tmp_path = Path(tmp)
+        library = tmp_path / (model_identifier + shared_library_extension())
+        log = _compile(name, defines, cc, token, library)
+        tmp_fmu = tmp_path / fmu.name
+        with zipfile.ZipFile(tmp_fmu, "w") as zf:
+            _zip_entry(zf, "modelDescription.xml", (scene / "modelDescription.xml").read_bytes())
+            _zip_entry(zf, f"binaries/{platform_tuple()}/{library.name}", library.read_bytes())
+            _zip_entry(zf, MANIFEST_ENTRY, (scene / "fmi-ls-manifest.xml").read_bytes())
+        tmp_log = tmp_path / "build.log"
+        tmp_log.write_text(log)
+        os.replace(tmp_log, out_dir / "build.log")
+        os.replace(tmp_fmu, fmu)  # publish last: an existing .fmu is always complete
+    return fmu
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m tests.scenes.build",
+                                     description="Build the lsdae test-scene FMUs.")
+    parser.add_argument("scenes", nargs="*", help=f"scene names (default: all of {scene_names()})")
+    parser.add_argument("--out", type=Path, help="copy the built FMUs into this folder")
+    parser.add_argument("-D", dest="defines", action="append", default=[], metavar="MACRO",
+                        help="preprocessor define, e.g. -D DEFECT_WRONG_JACOBIAN (repeatable)")
+    parser.add_argument("--cache-dir", type=Path, help=f"cache folder (default: ${CACHE_ENV_VAR} "
+                        f"or {DEFAULT_CACHE_DIR})")
+    args = parser.parse_args(argv)
+    try:
+        for name in args.scenes or scene_names():
+            fmu = build_scene(name, defines=args.defines, cache_dir=args.cache_dir)
+            if args.out:
+                args.out.mkdir(parents=True, exist_ok=True)
+                fmu = Path(shutil.copyfile(fmu, args.out / fmu.name))
+            print(fmu)
+    except SceneBuildError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 1
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,89 @@
+/*
+ * dae_model.h - the interface between the lsdae test-scene framework
+ * (fmi3_framework.c) and one model file (tests/scenes/<Name>/model.c).
+ *
+ * A model is a semi-explicit index-1 DAE
+ *
+ *     der(x) = f(t, x, w, u)      (derivatives)
+ *          0 = g(t, x, w, u)      (residuals, one per algebraic variable)
+ *          y = h(t, x, w, u)      (outputs)
+ *
+ * The model file defines exactly one object, `const ModelDef MODEL`, which
+ * lists the value references of every variable, the start and nominal values
+ * and two callbacks: `eval` (f, g, h) and `partials` (their analytic partial
+ * derivatives).  Everything else (state machine, Newton solver for ODE mode,
+ * total derivatives, directional/adjoint derivatives) is in the framework.
+ *
+ * Deliberately defective variants are built by compiling with -DDEFECT_xxx;
+ * put the defect into model.c (or the framework) inside #ifdef DEFECT_xxx.
+ */
+#ifndef DAE_MODEL_H
+#define DAE_MODEL_H
+
+#include "fmi3Functions.h"
+
+/* Upper bound for each of nx, nw, nu, ny. */
+#define FMU_MAX_VARS 8
+
+typedef void (*ModelEvalFn)(double t, const double x[], const double w[],
+                            const double u[], double der[], double res[],
+                            double y[]);
+
+/*
+ * Partial derivatives.  J is a dense, row-major matrix, zeroed by the caller,
+ * with the rows    [ der(0..nx-1) | res(0..nw-1) | y(0..ny-1) ]
+ * and the columns  [ x(0..nx-1) | w(0..nw-1) | u(0..nu-1) | t ].
+ * Use the D_* macros below to address it.
+ */
+typedef void (*ModelPartialsFn)(double t, const double x[], const double w[],
+                                const double u[], double J[]);
+
+typedef struct {
+    int nx;  /* continuous states x (and their derivatives) */
+    int nw;  /* algebraic variables w; also the number of residuals */
+    int nu;  /* continuous inputs u */
+    int ny;  /* continuous outputs y */
+
+    fmi3ValueReference vr_time;       /* the independent variable */
+    fmi3ValueReference vr_enable;     /* Boolean structural parameter (DAE mode switch) */
+    fmi3Boolean        enable_tunable;/* variability tunable (else fixed) */
+
+    fmi3ValueReference vr_x[FMU_MAX_VARS];
+    fmi3ValueReference vr_der[FMU_MAX_VARS];
+    fmi3ValueReference vr_w[FMU_MAX_VARS];
+    fmi3ValueReference vr_res[FMU_MAX_VARS];
+    fmi3ValueReference vr_u[FMU_MAX_VARS];
+    fmi3ValueReference vr_y[FMU_MAX_VARS];
+
+    double x_start[FMU_MAX_VARS];
+    double w_start[FMU_MAX_VARS];     /* the guess values (initial="approx") */
+    double u_start[FMU_MAX_VARS];
+    double x_nominal[FMU_MAX_VARS];
+    double w_nominal[FMU_MAX_VARS];   /* used to scale the Newton step */
+
+    ModelEvalFn     eval;
+    ModelPartialsFn partials;
+} ModelDef;
+
+extern const ModelDef MODEL;
+
+/*
+ * Helpers for model.c.  They need the model's sizes as the macros NX, NW, NU
+ * (define them before use) and a local matrix called J.
+ */
+#define D_NCOLS        (NX + NW + NU + 1)
+#define D_AT(r, c)     J[(r) * D_NCOLS + (c)]
+#define D_DER_X(i, j)  D_AT((i),           (j))
+#define D_DER_W(i, j)  D_AT((i),           NX + (j))
+#define D_DER_U(i, j)  D_AT((i),           NX + NW + (j))
+#define D_DER_T(i)     D_AT((i),           NX + NW + NU)
+#define D_RES_X(i, j)  D_AT(NX + (i),      (j))
+#define D_RES_W(i, j)  D_AT(NX + (i),      NX + (j))
+#define D_RES_U(i, j)  D_AT(NX + (i),      NX + NW + (j))
+#define D_RES_T(i)     D_AT(NX + (i),      NX + NW + NU)
+#define D_OUT_X(i, j)  D_AT(NX + NW + (i), (j))
+#define D_OUT_W(i, j)  D_AT(NX + NW + (i), NX + (j))
+#define D_OUT_U(i, j)  D_AT(NX + NW + (i), NX + NW + (j))
+#define D_OUT_T(i)     D_AT(NX + NW + (i), NX + NW + NU)
+
+#endif /* DAE_MODEL_H */

@@ -1,0 +1,307 @@
+"""Parse XML from an untrusted FMU safely, and say precisely why a document cannot be used.
+
+:func:`parse_xml` never expands or fetches entities, never touches the network, keeps source
+lines, and never raises: every problem becomes a :class:`~conformance.findings.Violation` with one
+of these pseudo-rules
+
+- ``xml-not-well-formed``: the first (namespace) well-formedness error, with line and column.
+  An undeclared prefix is reported as such even where libxml2 would only warn and build a tree.
+- ``xml-unsafe-construct``: a DOCTYPE that declares entities or other markup, or refers to an
+  external DTD. Other importers would expand or fetch what lsdae ignores, so the content cannot be
+  trusted and no tree is returned.
+- ``xml-encoding``: the document is not UTF-8 (FMI requires UTF-8), or, on request, its XML
+  declaration does not state the encoding (AR-04).
+
+:func:`element_path` gives the readable XPath-like path used in locations.
+"""
+from __future__ import annotations
+
+import logging
+import re
+
+from lxml import etree
+
+from conformance.drafts import LS_NAMESPACE
+from conformance.findings import Location, Violation, evidence
+
+log = logging.getLogger(__name__)
+
+NOT_WELL_FORMED = "xml-not-well-formed"
+UNSAFE_CONSTRUCT = "xml-unsafe-construct"
+ENCODING = "xml-encoding"
+
+# Namespaces we can suggest when a document uses the prefix without declaring it.
+KNOWN_PREFIXES = {
+    "fmi-ls": LS_NAMESPACE,
+    "xsi": "http://www.w3.org/2001/XMLSchema-instance",
+    "xs": "http://www.w3.org/2001/XMLSchema",
+}
+
+_UNDEFINED_PREFIX = re.compile(r"Namespace prefix (\S+?) (?:for (\S+) )?on (\S+) is not defined")
+_DECLARATION = re.compile(rb"^<\?xml\s[^>]*?\?>")
+_DECLARED_ENCODING = re.compile(rb"""\sencoding\s*=\s*["']([A-Za-z0-9._:-]*)["']""")
+_UTF8_NAMES = {"utf-8", "utf8"}
+# libxml2 error types that mean "entity handling stopped the parse", not a syntax slip.
+_ENTITY_ERRORS = ("RESOURCE_LIMIT", "ENTITY", "AMPLIFICATION", "LOOP")
+# Limits that hold without XML_PARSE_HUGE: 10 MB text nodes, depth 256, 50000-character names.
+_LIMIT_ERRORS = ("ERR_RESOURCE_LIMIT", "ERR_NAME_TOO_LONG")
+_BOMS = (
+    (b"\xef\xbb\xbf", "UTF-8"),
+    (b"\xff\xfe\x00\x00", "UTF-32"),
+    (b"\x00\x00\xfe\xff", "UTF-32"),
+    (b"\xff\xfe", "UTF-16"),
+    (b"\xfe\xff", "UTF-16"),
+)
+
+
+def make_parser() -> etree.XMLParser:
+    """A fresh parser with every network and entity feature turned off."""
+    return etree.XMLParser(
+        resolve_entities=False,
+        no_network=True,
+        load_dtd=False,
+        dtd_validation=False,
+        huge_tree=False,
+        remove_comments=False,
+        remove_pis=False,
+    )
+
+
+def parse_xml(
+    data: bytes, *, file: str, require_declaration: bool = False
+) -> tuple[etree._ElementTree | None, list[Violation]]:
+    """Parse ``data`` (the bytes of ``file`` inside the FMU) without ever trusting it.
+
+    Returns the tree, or None when the document is not well-formed or not safe to use, and the
+    violations found. With ``require_declaration`` a missing ``<?xml ... encoding="UTF-8"?>``
+    declaration is reported (AR-04 asks it of modelDescription.xml). Never raises.
+    """
+    try:
+        return _parse(bytes(data), file=file, require_declaration=require_declaration)
+    except Exception as exc:  # untrusted input: anything unexpected is a finding, not a crash
+        log.debug("unexpected failure parsing %s", file, exc_info=True)
+        message = f"cannot be parsed: {type(exc).__name__}: {exc}"
+        return None, [Violation(message, Location(file=file), rule=NOT_WELL_FORMED)]
+
+
+def _parse(
+    data: bytes, *, file: str, require_declaration: bool
+) -> tuple[etree._ElementTree | None, list[Violation]]:
+    where = Location(file=file)
+    if not data.strip():
+        msg = "is empty" if not data else "contains only white space"
+        return None, [Violation(f"{msg}; a well-formed document has a root element", where,
+                                rule=NOT_WELL_FORMED)]
+    violations = _encoding_violations(data, where, require_declaration=require_declaration)
+    parser = make_parser()
+    root = None
+    failure = ""
+    try:
+        root = etree.fromstring(data, parser)
+    except etree.XMLSyntaxError as exc:
+        failure = str(exc)
+    # In log order: the first error-level entry, or an undeclared prefix, which some libxml2
+    # versions report only as a warning while still building a tree.
+    problems = [e for e in parser.error_log if e.level >= etree.ErrorLevels.ERROR
+                or e.type_name == "NS_ERR_UNDEFINED_NAMESPACE"]
+    if root is not None and not problems:
+        tree = root.getroottree()
+        unsafe = _doctype_violations(tree, data, where)
+        return (None, violations + unsafe) if unsafe else (tree, violations)
+    if not problems:
+        return None, violations + [Violation(
+            f"is not well-formed XML: {failure or 'no root element'}", where, rule=NOT_WELL_FORMED)]
+    return None, violations + _failure_violations(problems, data, file, violations)
+
+
+def _failure_violations(problems: list[etree._LogEntry], data: bytes, file: str,
+                        earlier: list[Violation]) -> list[Violation]:
+    """Say why the parse failed: unsafe construct, parser limit, encoding, or a syntax error."""
+    first = problems[0]
+    kind = first.type_name
+    detail = _clip(first.message)
+    at = Location(file=file, line=first.line or None, column=first.column or None)
+    ev = evidence(libxml2=kind)
+    entities = _contains(data, "<!ENTITY")
+    if entities and any(t in kind for t in _ENTITY_ERRORS):
+        return [Violation("declares entities in a DOCTYPE and expanding them hits the parser's "
+                          f"safety limits ({detail}); entities are never expanded or fetched",
+                          at, ev, rule=UNSAFE_CONSTRUCT)]
+    if kind.startswith("IO_") and _contains(data, "<!DOCTYPE"):
+        return [Violation(f"refers to an external DTD or entity ({detail}); it is never fetched, "
+                          "and the document is not used", at, ev, rule=UNSAFE_CONSTRUCT)]
+    if kind in _LIMIT_ERRORS:
+        return [Violation(f"exceeds a safety limit of the XML parser ({detail}); the limits are "
+                          "not lifted for untrusted files", at, ev, rule=UNSAFE_CONSTRUCT)]
+    out = []
+    if kind == "ERR_UNSUPPORTED_ENCODING" and not any(v.rule == ENCODING for v in earlier):
+        out.append(Violation(f"declares an encoding that cannot be decoded ({detail}); FMI "
+                             "requires UTF-8", Location(file=file), rule=ENCODING))
+    out.append(_syntax_violation(first, file, further=len(problems) - 1))
+    if entities:
+        out.append(Violation("declares entities in a DOCTYPE; entities are never expanded or "
+                             "fetched", Location(file=file), rule=UNSAFE_CONSTRUCT))
+    return out
+
+
+def _syntax_violation(err: etree._LogEntry, file: str, *, further: int) -> Violation:
+    where = Location(file=file, line=err.line or None, column=err.column or None)
+    text = _clip(err.message)
+    ev: dict[str, object] = {"libxml2": err.type_name}
+    if further > 0:
+        ev["further_errors"] = further
+    match = _UNDEFINED_PREFIX.search(text)
+    if err.type_name == "NS_ERR_UNDEFINED_NAMESPACE" and match:
+        prefix, attribute, element = match.groups()
+        uri = KNOWN_PREFIXES.get(prefix)
+        fix = f'add xmlns:{prefix}="{uri}"' if uri else f'declare it with xmlns:{prefix}="..."'
+        message = (f"is not namespace-well-formed: namespace prefix '{prefix}' is used but never "
+                   f"declared ({fix} to the root element)")
+        ev.update(prefix=prefix, element=element)
+        if attribute:
+            ev["attribute"] = f"{prefix}:{attribute}"
+        return Violation(message, where, evidence(ev), rule=NOT_WELL_FORMED)
+    if err.type_name == "ERR_INVALID_ENCODING" or "Invalid bytes in character encoding" in text:
+        message = ("contains bytes that are not valid in its encoding (FMI requires UTF-8; "
+                   "a Latin-1 file without an encoding declaration looks like this)")
+        return Violation(message, where, evidence(ev), rule=NOT_WELL_FORMED)
+    return Violation(f"is not well-formed XML: {text}", where, evidence(ev), rule=NOT_WELL_FORMED)
+
+
+def _encoding_violations(data: bytes, where: Location, *,
+                         require_declaration: bool) -> list[Violation]:
+    """Report a byte-order mark or declaration naming anything but UTF-8."""
+    for bom, name in _BOMS:
+        if data.startswith(bom):
+            if name != "UTF-8":
+                return [Violation(f"is encoded as {name} (byte-order mark); FMI requires UTF-8",
+                                  where, evidence(encoding=name), rule=ENCODING)]
+            data = data[len(bom):]
+            break
+    else:
+        sniffed = _sniff_wide(data)
+        if sniffed:
+            return [Violation(f"is encoded as {sniffed}; FMI requires UTF-8", where,
+                              evidence(encoding=sniffed), rule=ENCODING)]
+    declaration = _DECLARATION.match(data[:1024])
+    declared = _DECLARED_ENCODING.search(declaration.group(0)) if declaration else None
+    if declared:
+        name = declared.group(1).decode("ascii", "replace")
+        if name.lower() not in _UTF8_NAMES:
+            return [Violation(f'declares encoding="{name}"; FMI requires UTF-8', where,
+                              evidence(encoding=name), rule=ENCODING)]
+        return []
+    if require_declaration:
+        what = ("has an XML declaration without encoding" if declaration
+                else "has no XML declaration")
+        return [Violation(f'{what}; FMI asks for <?xml version="1.0" encoding="UTF-8"?> on the '
+                          "first line", Location(file=where.file, line=1), rule=ENCODING)]
+    return []
+
+
+def _sniff_wide(data: bytes) -> str | None:
+    """UTF-16/32 without a byte-order mark, recognised by the NUL bytes around '<'."""
+    head = data[:4]
+    if head in (b"<\x00\x00\x00", b"\x00\x00\x00<"):
+        return "UTF-32"
+    if head[:2] in (b"<\x00", b"\x00<"):
+        return "UTF-16"
+    return None
+
+
+def _clip(text: str | None, limit: int = 200) -> str:
+    """Untrusted text made safe to print: no control characters, bounded length."""
+    text = "".join(c if c.isprintable() else " " for c in (text or "").strip())
+    return text if len(text) <= limit else text[:limit] + "..."
+
+
+def _contains(data: bytes, needle: str) -> bool:
+    return any(needle.encode(enc) in data for enc in ("ascii", "utf-16-le", "utf-16-be"))
+
+
+def _doctype_violations(tree: etree._ElementTree, data: bytes, where: Location) -> list[Violation]:
+    info = tree.docinfo
+    dtd = info.internalDTD
+    entities = list(dtd.iterentities()) if dtd is not None else []
+    declarations = list(dtd.iterelements()) if dtd is not None else []
+    external = info.system_url or info.public_id
+    if not (entities or declarations or external):
+        return []
+    at = Location(file=where.file, line=_doctype_line(data))
+    fetched = [e for e in entities if e.system_url]
+    names = [e.name for e in entities]
+    if fetched:
+        first = fetched[0]
+        message = (f"declares an external entity '{_clip(first.name)}' referring to "
+                   f"'{_clip(first.system_url)}' (XXE); it is never fetched, and the document "
+                   "is not used")
+    elif entities:
+        shown = ", ".join(_clip(n, 40) for n in names[:5]) + (", ..." if len(names) > 5 else "")
+        message = (f"declares {len(entities)} entit{'y' if len(entities) == 1 else 'ies'} in a "
+                   f"DOCTYPE ({shown}); entities are never expanded (a nested set is the "
+                   "'billion laughs' attack), and the document is not used")
+    elif external:
+        message = (f"refers to an external DTD '{_clip(external)}'; it is never fetched, and other "
+                   "importers could read different content, so the document is not used")
+    else:
+        message = ("declares markup in a DOCTYPE; other importers would apply it (default "
+                   "attributes), so the document is not used")
+    ev = evidence(entities=names[:20], external_dtd=external or None)
+    return [Violation(message, at, ev, rule=UNSAFE_CONSTRUCT)]
+
+
+def _doctype_line(data: bytes) -> int | None:
+    """The line of ``<!DOCTYPE``: libxml2 keeps no line for it."""
+    for enc in ("ascii", "utf-16-le", "utf-16-be"):
+        index = data.find("<!DOCTYPE".encode(enc))
+        if index >= 0:
+            return data.count("\n".encode(enc), 0, index) + 1
+    return None
+
+
+def element_path(el: etree._Element) -> str:
+    """A readable XPath-like path, e.g. ``/fmiModelDescription/ModelVariables/Float64[@name='x']``.
+
+    An element with a ``name`` attribute is identified by it; otherwise by its position among
+    siblings with the same tag, and only when it has such siblings. Cheap: no whole-tree scan.
+    """
+    try:
+        steps = []
+        node: etree._Element | None = el
+        while node is not None:
+            steps.append(_step(node))
+            node = node.getparent()
+        return "/" + "/".join(reversed(steps))
+    except Exception:  # a path is a convenience; never let it break a check
+        log.debug("element_path failed", exc_info=True)
+        return ""
+
+
+def _step(node: etree._Element) -> str:
+    tag = node.tag
+    if not isinstance(tag, str):
+        if isinstance(node, etree._Comment):
+            label = "comment()"
+        elif isinstance(node, etree._ProcessingInstruction):
+            label = "processing-instruction()"
+        else:
+            label = "node()"
+        return f"{label}[{_position(node, None)}]"
+    qname = etree.QName(tag).localname
+    if node.prefix:
+        qname = f"{node.prefix}:{qname}"
+    name = node.get("name")
+    if name is not None:
+        quote = "'" if "'" not in name else '"'
+        return f"{qname}[@name={quote}{name}{quote}]"
+    if node.getparent() is None:
+        return qname
+    same = any(True for _ in node.itersiblings(tag)) or any(
+        True for _ in node.itersiblings(tag, preceding=True))
+    return f"{qname}[{_position(node, tag)}]" if same else qname
+
+
+def _position(node: etree._Element, tag: str | None) -> int:
+    if tag is None:
+        return 1 + sum(1 for s in node.itersiblings(preceding=True) if type(s) is type(node))
+    return 1 + sum(1 for _ in node.itersiblings(tag, preceding=True))

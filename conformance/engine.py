@@ -18,7 +18,7 @@ from .checks import REGISTRY
 from .context import CheckContext
 from .drafts import UNKNOWN, detect_draft, legacy_violations, unrecognised_violations
 from .findings import Finding, FmuReport, Location, Report, Severity, Violation, evidence
-from .fmu import open_fmu
+from .fmu import ArchiveLimits, ArchiveReadError, open_fmu
 from .manifest import MANIFEST, Manifest, read_manifest
 from .model import MODEL_DESCRIPTION, ModelDescription, read_model_description
 from .schemas import validate_manifest, validate_model_description
@@ -178,7 +178,8 @@ class _State:
 
 def _run(path: Path, options: EngineOptions, catalogue: Catalogue, selection: RuleSelection,
          collector: _Collector, texts: dict[str, bytes], state: _State) -> None:
-    source, violations = open_fmu(path)
+    limits = ArchiveLimits.from_options(catalogue["archive-too-large"].option_values)
+    source, violations = open_fmu(path, limits=limits)
     collector.add_stage(violations)
     if source is None:
         return
@@ -196,10 +197,12 @@ def _run(path: Path, options: EngineOptions, catalogue: Catalogue, selection: Ru
 def _read(source, name: str, collector: _Collector) -> bytes | None:
     try:
         return source.read(name)
-    except Exception as exc:  # the archive layer reports limits; this is a last resort
+    except ArchiveReadError as exc:  # limits, corrupt data: the archive layer names the rule
+        collector.add_stage([exc.violation])
+    except Exception as exc:  # a last resort
         collector.emit("archive-unreadable", Violation(
             f"cannot read {name}: {exc}", Location(file=name)))
-        return None
+    return None
 
 
 def _read_model(source, names: Sequence[str], collector: _Collector,

@@ -98,3 +98,22 @@ def materialise(case: Case, dest: Path) -> Path:
                     zf.write(src, src.relative_to(root).as_posix())
         return fmu
     return root
+
+
+def zip_scene(base: str, target: Path, *, extra: dict[str, bytes] | None = None,
+              compression: int = zipfile.ZIP_DEFLATED, duplicate: str | None = None,
+              replace: dict[str, bytes] | None = None) -> Path:
+    """Zip a scene's XML (plus ``extra`` members) for archive-level fixtures."""
+    import warnings
+
+    target.parent.mkdir(parents=True, exist_ok=True)
+    members = {name: path.read_bytes() for name, path in scene_xml(base).items()}
+    members.update(replace or {})
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # zipfile warns about the duplicate on purpose
+        with zipfile.ZipFile(target, "w", compression) as zf:
+            for name, data in {**members, **(extra or {})}.items():
+                zf.writestr(name, data)
+            if duplicate:
+                zf.writestr(duplicate, members[duplicate])
+    return target

@@ -7,11 +7,12 @@ from conformance import engine
 from conformance.checks import REGISTRY
 from conformance.engine import EngineOptions, check_fmu
 from conformance.findings import Severity, Violation
-from tests.fixturekit import Case, FIXTURES, materialise
+from tests.fixturekit import Case, materialise
 
 
 def _scene(tmp_path, **spec):
-    case = Case("TEST", "pass", FIXTURES, {"base": "HelloWorldDAE", **spec})
+    (tmp_path / "spec").mkdir()
+    case = Case("TEST", "pass", tmp_path / "spec", {"base": "HelloWorldDAE", **spec})
     return materialise(case, tmp_path)
 
 

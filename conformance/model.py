@@ -54,6 +54,7 @@ class Variable:
     clocks: str | None = None
     previous: int | None = None
     raw_vr: str | None = None     # the attribute text, when it did not parse as an integer
+    aliases: tuple[str, ...] = ()  # names of <Alias> children
 
     @property
     def is_float(self) -> bool:
@@ -199,6 +200,7 @@ def _variable(el: etree._Element) -> Variable | None:
     declared_init = a.get("initial")
     start = a.get("start")
     dims = []
+    aliases = []
     for child in el:
         if not isinstance(child.tag, str):
             continue
@@ -206,6 +208,8 @@ def _variable(el: etree._Element) -> Variable | None:
         if tag == "Start" and start is None:
             start = " ".join(c.get("value", "") for c in el if isinstance(c.tag, str)
                              and etree.QName(c).localname == "Start")
+        elif tag == "Alias":
+            aliases.append(child.get("name", ""))
         elif tag == "Dimension":
             dims.append(Dimension(child.get("start"), parse_uint(child.get("valueReference")),
                                   child.sourceline))
@@ -221,7 +225,7 @@ def _variable(el: etree._Element) -> Variable | None:
         maximum=a.get("max"), description=a.get("description"),
         reinit=a.get("reinit", "false") in ("true", "1"), clocks=a.get("clocks"),
         previous=parse_uint(a.get("previous")),
-        raw_vr=raw_vr if vr is None else None,
+        raw_vr=raw_vr if vr is None else None, aliases=tuple(aliases),
     )
 
 

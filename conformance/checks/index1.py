@@ -1,0 +1,199 @@
+"""Static checks: index 1 (DAE601-). Is dg/dw structurally non-singular?
+
+The residual/algebraic-variable graph comes from the manifest ``dependencies`` of each Residual
+(an absent attribute means "depends on every algebraic variable", an empty one "on none", MS-20;
+entries that are not algebraic variables do not count). Array variables are expanded into their
+elements; since dependencies are per variable (MS-13), each element of a residual depends on every
+element of the algebraic variables it lists. The graph work is in :mod:`conformance.structure`.
+"""
+from __future__ import annotations
+
+import logging
+from bisect import bisect_right
+from math import prod
+from typing import Iterable, Iterator, Sequence
+
+from ..context import Check, CheckContext
+from ..findings import Location, Violation, evidence
+from ..manifest import VrRef
+from ..model import ModelDescription, Unknown, Variable
+from ..structure import BipartitePattern, DulmageMendelsohn, dulmage_mendelsohn
+
+log = logging.getLogger(__name__)
+
+
+def _size(var: Variable, model: ModelDescription) -> int | None:
+    """Number of elements of ``var`` at its start dimensions, or None if a size is unknown."""
+    sizes = []
+    for dim in var.dimensions:
+        text = dim.start
+        if text is None and dim.vr is not None:
+            target = model.by_vr.get(dim.vr)
+            text = target.start if target is not None else None
+        if text is None or not text.strip().isdigit():
+            return None
+        sizes.append(int(text))
+    return prod(sizes)
+
+
+class _Elements:
+    """Variables laid out element by element: variable i owns indices offsets[i]..offsets[i+1]-1."""
+
+    def __init__(self) -> None:
+        self.vars: list[Variable] = []
+        self.offsets: list[int] = [0]
+
+    def add(self, var: Variable, size: int) -> range:
+        self.vars.append(var)
+        self.offsets.append(self.offsets[-1] + size)
+        return range(self.offsets[-2], self.offsets[-1])
+
+    def __len__(self) -> int:
+        return self.offsets[-1]
+
+    def owner(self, index: int) -> int:
+        """Position (in ``vars``) of the variable that owns element ``index``."""
+        return bisect_right(self.offsets, index) - 1
+
+    def name(self, index: int) -> str:
+        i = self.owner(index)
+        var = self.vars[i]
+        return f"{var.name}[{index - self.offsets[i] + 1}]" if var.dimensions else var.name
+
+    def names(self, indices: Iterable[int]) -> list[str]:
+        return [self.name(int(k)) for k in indices]
+
+
+def _listing(names: Sequence[str], total: int) -> str:
+    """Quoted names, then "and N more" when ``total`` exceeds the names given."""
+    shown = ", ".join(f"'{n}'" for n in names)
+    return shown + (f" and {total - len(names)} more" if total > len(names) else "")
+
+
+def _plural(n: int, word: str) -> str:
+    return f"{n} {word}" if n == 1 else f"{n} {word}s"
+
+
+def _s(n: int, verb: str) -> str:
+    """The verb agreeing with a subject of ``n`` items ("depend" -> "depends" for one)."""
+    return verb + "s" if n == 1 else verb
+
+
+def _of_them(k: int) -> str:
+    return "1 of them is" if k == 1 else f"{k} of them are"
+
+
+def _explain(dm: DulmageMendelsohn, rows: _Elements, cols: _Elements, limit: int) -> str:
+    """One clause per non-square part, naming at most ``limit`` elements of each list."""
+    parts = []
+    n_rows, n_cols = int(dm.over_rows.size), int(dm.over_cols.size)
+    if n_rows:
+        res = _listing(rows.names(dm.over_rows[:limit]), n_rows)
+        if n_cols:
+            parts.append(f"{_plural(n_rows, 'residual')} {res} together depend only on "
+                         f"{_plural(n_cols, 'algebraic variable')} "
+                         f"{_listing(cols.names(dm.over_cols[:limit]), n_cols)}, so "
+                         f"{_of_them(n_rows - n_cols)} structurally redundant")
+        else:
+            parts.append(f"{_plural(n_rows, 'residual')} {res} {_s(n_rows, 'depend')} on no "
+                         "algebraic variable")
+    n_rows, n_cols = int(dm.under_rows.size), int(dm.under_cols.size)
+    if n_cols:
+        alg = _listing(cols.names(dm.under_cols[:limit]), n_cols)
+        if n_rows:
+            parts.append(f"{_plural(n_cols, 'algebraic variable')} {alg} together appear only "
+                         f"in {_plural(n_rows, 'residual')} "
+                         f"{_listing(rows.names(dm.under_rows[:limit]), n_rows)}, so "
+                         f"{_of_them(n_cols - n_rows)} determined by no residual")
+        else:
+            parts.append(f"{_plural(n_cols, 'algebraic variable')} {alg} "
+                         f"{_s(n_cols, 'appear')} in no residual")
+    return "; ".join(parts)
+
+
+def _resolve(refs: Sequence[VrRef | Unknown], model: ModelDescription
+             ) -> list[tuple[VrRef | Unknown, Variable]] | None:
+    """The distinct variables of ``refs``; None when one does not resolve (reported elsewhere)."""
+    out: dict[int, tuple[VrRef | Unknown, Variable]] = {}
+    for ref in refs:
+        var = model.by_vr.get(ref.vr) if ref.vr is not None else None
+        if var is None:
+            return None
+        out.setdefault(ref.vr, (ref, var))  # type: ignore[arg-type]
+    return list(out.values())
+
+
+def index1_structurally_singular(ctx: CheckContext, *, max_names: int = 5,
+                                 max_evidence: int = 100, max_edges: int = 5_000_000
+                                 ) -> Iterator[Violation]:
+    """The residual/algebraic-variable graph has a matching of size min(#residuals, #algebraic)."""
+    model, manifest = ctx.model, ctx.manifest
+    assert model is not None and manifest is not None
+    algebraic = _resolve(manifest.algebraic, model)
+    residuals = _resolve(manifest.residuals, model)
+    if algebraic is None or residuals is None or not algebraic or not residuals:
+        return
+    cols = _Elements()
+    col_of: dict[int, range] = {}
+    for _, var in algebraic:
+        size = _size(var, model)
+        if size is None:
+            log.info("index-1 check skipped: size of %s is not known", var.name)
+            return
+        col_of[var.vr] = cols.add(var, size)  # type: ignore[index]
+    rows = _Elements()
+    row_deps: list[list[int] | None] = []
+    edges = 0
+    for ref, var in residuals:
+        size = _size(var, model)
+        if size is None:
+            log.info("index-1 check skipped: size of %s is not known", var.name)
+            return
+        deps = ref.dependencies  # type: ignore[union-attr]
+        mine = None if deps is None else [c for vr in deps if vr in col_of for c in col_of[vr]]
+        edges += size * (len(mine) if mine is not None else 0)
+        if edges > max_edges:
+            log.warning("index-1 check skipped: more than %d element edges", max_edges)
+            return
+        rows.add(var, size)
+        row_deps.extend([mine] * size)
+    dm = dulmage_mendelsohn(BipartitePattern.from_rows(row_deps, len(cols)))
+    needed = min(len(rows), len(cols))
+    if dm.rank >= needed:
+        return
+    yield _violation(dm, needed, rows, cols, [r for r, _ in residuals],
+                     [a for a, _ in algebraic], manifest.file, max_names, max_evidence)
+
+
+def _violation(dm: DulmageMendelsohn, needed: int, rows: _Elements, cols: _Elements,
+               res_refs: Sequence[VrRef | Unknown], alg_refs: Sequence[VrRef | Unknown],
+               manifest_file: str, max_names: int, max_evidence: int) -> Violation:
+    if dm.over_rows.size:
+        ref = res_refs[rows.owner(int(dm.over_rows[0]))]
+        location = Location(file=ref.file, line=ref.line, path=ref.path)  # type: ignore[union-attr]
+        subject = rows.name(int(dm.over_rows[0]))
+    else:
+        ref = alg_refs[cols.owner(int(dm.under_cols[0]))]
+        location = Location(file=manifest_file, line=ref.line, path=ref.path)
+        subject = cols.name(int(dm.under_cols[0]))
+    return Violation(
+        "the Jacobian dg/dw of the residuals with respect to the algebraic variables is "
+        f"structurally singular (structural rank {dm.rank} of {needed}): "
+        f"{_explain(dm, rows, cols, max_names)}; give each algebraic variable a "
+        "residual that determines it, or correct the residual dependencies",
+        location,
+        evidence(
+            structural_rank=dm.rank, residuals=len(rows), algebraic_variables=len(cols),
+            over_determined_residuals=rows.names(dm.over_rows[:max_evidence]),
+            over_determined_variables=cols.names(dm.over_cols[:max_evidence]),
+            under_determined_variables=cols.names(dm.under_cols[:max_evidence]),
+            under_determined_residuals=rows.names(dm.under_rows[:max_evidence]),
+            over_determined_size=[int(dm.over_rows.size), int(dm.over_cols.size)],
+            under_determined_size=[int(dm.under_rows.size), int(dm.under_cols.size)],
+            well_determined_size=int(dm.square_rows.size)),
+        subject=subject)
+
+
+CHECKS: dict[str, Check] = {
+    "DAE601": index1_structurally_singular,
+}

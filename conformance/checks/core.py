@@ -245,12 +245,24 @@ _VARIABILITY_MESSAGES = {
 }
 
 
+def _enable_vrs(ctx: CheckContext) -> frozenset[int]:
+    """Value references of the manifest's enable parameter(s): the enable rules (DAE2xx)
+    explain their causality, variability and start better than the generic core rules."""
+    if ctx.manifest is None or ctx.model is None:
+        return frozenset()
+    names = {v.name: v.vr for v in ctx.model.variables}
+    vrs = {ref.vr if ref.vr is not None else names.get(ref.name or "")
+           for ref in ctx.manifest.enables}
+    return frozenset(vr for vr in vrs if vr is not None)
+
+
 def causality_variability_invalid(ctx: CheckContext) -> Iterator[Violation]:
     """DAE504 MV-10, MV-11, MV-12: legal causality/variability pairs (defaults applied)."""
     if (model := ctx.model) is None:
         return
+    enable = _enable_vrs(ctx)
     for var, (fault, _, _) in _analyse(model).verdicts:
-        if fault is None:
+        if fault is None or var.vr in enable:
             continue
         yield Violation(
             _VARIABILITY_MESSAGES[fault], _var_loc(model, var),
@@ -282,8 +294,9 @@ def start_missing(ctx: CheckContext) -> Iterator[Violation]:
     """DAE506 MV-21: start is required for exact/approx, parameters, inputs and constants."""
     if (model := ctx.model) is None:
         return
+    enable = _enable_vrs(ctx)
     for var, (_, _, problem) in _analyse(model).verdicts:
-        if problem is not None and problem[0] == "missing":
+        if problem is not None and problem[0] == "missing" and var.vr not in enable:
             yield Violation(
                 "no start value for {subject}, which FMI 3.0 requires for inputs, parameters, "
                 "constants and initial exact or approx; add a start value",

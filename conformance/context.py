@@ -1,12 +1,15 @@
 """What a check sees: the parsed model, the manifest, the draft and the archive's file names."""
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import Callable, Iterable
+from dataclasses import dataclass, field
+from typing import Any, Callable, Iterable, TypeVar
 
 from .findings import Violation
 from .manifest import Manifest
 from .model import ModelDescription
+
+
+T = TypeVar("T")
 
 
 @dataclass(frozen=True)
@@ -17,6 +20,14 @@ class CheckContext:
     manifest: Manifest | None
     draft: str | None
     names: tuple[str, ...] = ()     # member names of the FMU (forward slashes)
+    _memo: dict[str, Any] = field(default_factory=dict, repr=False, compare=False, hash=False)
+
+    def memo(self, key: str, compute: Callable[[], T]) -> T:
+        """Compute a derived fact once per FMU and share it between checks (e.g. the set of
+        continuous states, or a classification several rules partition)."""
+        if key not in self._memo:
+            self._memo[key] = compute()
+        return self._memo[key]
 
 
 # A check takes the context and its rule options (keyword-only) and yields violations.

@@ -7,10 +7,12 @@ input: an exception inside a check becomes an ``internal-error`` finding and the
 """
 from __future__ import annotations
 
+import contextlib
+import gc
 import logging
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Iterable, Sequence
+from typing import Iterable, Iterator, Sequence
 
 from . import __version__
 from .catalogue import Catalogue, RuleSpec, default_catalogue
@@ -155,7 +157,8 @@ def check_fmu(path: Path, *, options: EngineOptions = EngineOptions(),
     collector = _Collector(selection, texts, options.group_threshold)
     state = _State()
     try:
-        _run(Path(path), options, catalogue, selection, collector, texts, state)
+        with _cyclic_gc_paused():
+            _run(Path(path), options, catalogue, selection, collector, texts, state)
     except Exception as exc:  # a defect of ours: report it, keep everything found so far
         log.exception("internal error while checking %s", path)
         collector.emit("internal-error", Violation(
@@ -166,6 +169,24 @@ def check_fmu(path: Path, *, options: EngineOptions = EngineOptions(),
         rules_run=tuple(sorted(state.run)), rules_skipped=tuple(sorted(state.skipped)),
         info=evidence(state.info),
     )
+
+
+@contextlib.contextmanager
+def _cyclic_gc_paused() -> Iterator[None]:
+    """Pause the cyclic garbage collector while one FMU is read and checked.
+
+    A large modelDescription becomes hundreds of thousands of small immutable objects, none in
+    a reference cycle; each allocation burst triggers full collections that scan them all again
+    (measured: 0.6 to 0.9 s of a 3.6 s check of 100k variables). Reference counting still frees
+    everything; the collector runs again as soon as the FMU is done.
+    """
+    was_enabled = gc.isenabled()
+    gc.disable()
+    try:
+        yield
+    finally:
+        if was_enabled:
+            gc.enable()
 
 
 class _State:

@@ -9,6 +9,7 @@ The shape itself is reported by the draft rules; the semantic rules then run on 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
 from lxml import etree
 
@@ -20,8 +21,7 @@ LS_ATTRIBUTES = ("fmi-ls-name", "fmi-ls-version", "fmi-ls-description")
 ENABLE_ELEMENTS = ("EnableDAEParameter", "EnableDAE")
 
 
-@dataclass(frozen=True, slots=True)
-class VrRef:
+class VrRef(NamedTuple):
     """A manifest element that points at a variable: enable parameter or algebraic variable."""
 
     vr: int | None
@@ -127,15 +127,13 @@ def _structure(ms: etree._Element, rname: str, file: str) -> list[Unknown]:
         kind = _local(el)
         counters[kind] = counters.get(kind, 0) + 1
         path = f"/{rname}/ModelStructure/{kind}[{counters[kind]}]"
-        formulations = [f for f in _elements(el) if _local(f) == "Formulation"]
+        formulations = ([f for f in _elements(el) if _local(f) == "Formulation"]
+                        if len(el) else [])
         if kind == "Residual" and formulations:
             first = formulations[0]
             unknown = parse_unknown(first, kind, file, f"{path}/Formulation[1]")
-            out.append(Unknown(**{**_fields(unknown), "formulations": len(formulations)}))
+            out.append(unknown._replace(formulations=len(formulations)))
         else:
             out.append(parse_unknown(el, kind, file, path))
     return out
 
-
-def _fields(u: Unknown) -> dict:
-    return {name: getattr(u, name) for name in Unknown.__dataclass_fields__}

@@ -8,7 +8,7 @@ applied here once, so every check sees the effective causality, variability and 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Iterator, Mapping
+from typing import Iterator, Mapping, NamedTuple
 
 from lxml import etree
 
@@ -23,16 +23,18 @@ STRUCTURE_KINDS = ("Output", "ContinuousStateDerivative", "ClockedState", "Initi
                    "EventIndicator")
 
 
-@dataclass(frozen=True, slots=True)
-class Dimension:
+class Dimension(NamedTuple):
     start: str | None
     vr: int | None
     line: int | None
 
 
-@dataclass(frozen=True, slots=True)
-class Variable:
-    """One variable of ``<ModelVariables>`` with FMI defaults applied."""
+class Variable(NamedTuple):
+    """One variable of ``<ModelVariables>`` with FMI defaults applied.
+
+    Immutable like the rest of the model; a NamedTuple rather than a frozen dataclass because a
+    modelDescription may hold 100,000 of them and construction cost matters (see reports/bench).
+    """
 
     name: str
     vr: int | None
@@ -69,8 +71,7 @@ class Variable:
         return f"'{self.name}' (valueReference {self.vr})" if self.vr is not None else f"'{self.name}'"
 
 
-@dataclass(frozen=True, slots=True)
-class Unknown:
+class Unknown(NamedTuple):
     """An element of a ModelStructure (core or manifest): Output, Residual, ..."""
 
     kind: str
@@ -175,13 +176,18 @@ def parse_unknown(el: etree._Element, kind: str, file: str, path: str,
     deps: tuple[int, ...] | None = None
     bad: list[str] = []
     if deps_text is not None:
-        values = []
-        for token in deps_text.split():
-            if token.isdigit():
-                values.append(int(token))
-            else:
-                bad.append(token)
-        deps = tuple(values)
+        tokens = deps_text.split()
+        joined = "".join(tokens)
+        if not joined or (joined.isascii() and joined.isdigit()):  # the common case, fast
+            deps = tuple(map(int, tokens))
+        else:
+            values = []
+            for token in tokens:
+                if token.isascii() and token.isdigit():
+                    values.append(int(token))
+                else:
+                    bad.append(token)
+            deps = tuple(values)
     kinds_text = a.get("dependenciesKind")
     kinds = tuple(kinds_text.split()) if kinds_text is not None else None
     return Unknown(kind=kind, vr=parse_uint(a.get("valueReference")), dependencies=deps,
@@ -189,44 +195,67 @@ def parse_unknown(el: etree._Element, kind: str, file: str, path: str,
                    bad_tokens=tuple(bad), index=a.get("index"))
 
 
+_DEFAULTS: dict[tuple[str, str, str | None], tuple[str, str | None]] = {}
+
+
+def _effective(type_: str, causality: str, declared_var: str | None) -> tuple[str, str | None]:
+    """(variability, default initial) for a kind of variable, memoised: few distinct keys."""
+    key = (type_, causality, declared_var)
+    found = _DEFAULTS.get(key)
+    if found is None:
+        variability = declared_var or default_variability(type_, causality)
+        found = _DEFAULTS[key] = (variability, default_initial(causality, variability))
+    return found
+
+
 def _variable(el: etree._Element) -> Variable | None:
-    type_ = etree.QName(el).localname if isinstance(el.tag, str) else ""
+    tag = el.tag
+    if not isinstance(tag, str):
+        return None
+    type_ = tag if tag[0] != "{" else etree.QName(el).localname
     if type_ not in VARIABLE_TYPES:
         return None
-    a = el.attrib
-    causality = a.get("causality", "local")
-    declared_var = a.get("variability")
-    variability = declared_var or default_variability(type_, causality)
-    declared_init = a.get("initial")
-    start = a.get("start")
-    dims = []
-    aliases = []
+    get = el.get
+    causality = get("causality", "local")
+    declared_var = get("variability")
+    variability, initial = _effective(type_, causality, declared_var)
+    declared_init = get("initial")
+    start = get("start")
+    dims: list[Dimension] = []
+    aliases: list[str] = []
+    if len(el):
+        start = _children_of_variable(el, start, dims, aliases)
+    raw_vr = get("valueReference")
+    vr = int(raw_vr) if raw_vr is not None and raw_vr.isascii() and raw_vr.isdigit() else None
+    derivative = get("derivative")
+    previous = get("previous")
+    return Variable(
+        get("name", ""), vr, type_, causality, variability, declared_init or initial,
+        declared_var, declared_init, start,
+        parse_uint(derivative) if derivative is not None else None,
+        el.sourceline, tuple(dims), get("nominal"), get("min"), get("max"),
+        get("description"), get("reinit", "false") in ("true", "1"), get("clocks"),
+        parse_uint(previous) if previous is not None else None,
+        raw_vr if vr is None else None, tuple(aliases),
+    )
+
+
+def _children_of_variable(el: etree._Element, start: str | None, dims: list[Dimension],
+                          aliases: list[str]) -> str | None:
+    """Read <Start>, <Alias> and <Dimension> children; returns the start value."""
+    starts = []
     for child in el:
         if not isinstance(child.tag, str):
             continue
         tag = etree.QName(child).localname
-        if tag == "Start" and start is None:
-            start = " ".join(c.get("value", "") for c in el if isinstance(c.tag, str)
-                             and etree.QName(c).localname == "Start")
+        if tag == "Start":
+            starts.append(child.get("value", ""))
         elif tag == "Alias":
             aliases.append(child.get("name", ""))
         elif tag == "Dimension":
             dims.append(Dimension(child.get("start"), parse_uint(child.get("valueReference")),
                                   child.sourceline))
-    raw_vr = a.get("valueReference")
-    vr = parse_uint(raw_vr)
-    return Variable(
-        name=a.get("name", ""), vr=vr, type=type_, causality=causality,
-        variability=variability,
-        initial=declared_init or default_initial(causality, variability),
-        declared_variability=declared_var, declared_initial=declared_init, start=start,
-        derivative=parse_uint(a.get("derivative")), line=el.sourceline,
-        dimensions=tuple(dims), nominal=a.get("nominal"), minimum=a.get("min"),
-        maximum=a.get("max"), description=a.get("description"),
-        reinit=a.get("reinit", "false") in ("true", "1"), clocks=a.get("clocks"),
-        previous=parse_uint(a.get("previous")),
-        raw_vr=raw_vr if vr is None else None, aliases=tuple(aliases),
-    )
+    return start if start is not None or not starts else " ".join(starts)
 
 
 def _children(el: etree._Element | None, name: str) -> list[etree._Element]:

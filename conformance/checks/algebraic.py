@@ -107,11 +107,17 @@ def _classified(ctx: CheckContext, wanted: str) -> Iterator[tuple[VrRef, Variabl
     model, manifest = ctx.model, ctx.manifest
     if model is None or manifest is None:
         return
-    states = continuous_states(model, manifest)
-    residuals = resolved_vrs(model, manifest.residuals)
-    for ref, var in _listed(model, manifest):
-        if algebraic_problem(var, states=states, residuals=residuals) == wanted:
-            yield ref, var
+
+    def classify() -> dict[str | None, list[tuple[VrRef, Variable]]]:
+        states = continuous_states(model, manifest)
+        residuals = resolved_vrs(model, manifest.residuals)
+        classes: dict[str | None, list[tuple[VrRef, Variable]]] = {}
+        for ref, var in _listed(model, manifest):
+            problem = algebraic_problem(var, states=states, residuals=residuals)
+            classes.setdefault(problem, []).append((ref, var))
+        return classes
+
+    yield from ctx.memo("algebraic-classes", classify).get(wanted, ())
 
 
 def _at_ref(ctx: CheckContext, ref: VrRef) -> Location:

@@ -11,13 +11,15 @@ from __future__ import annotations
 import logging
 from bisect import bisect_right
 from math import prod
-from typing import Iterable, Iterator, Sequence
+from typing import TYPE_CHECKING, Iterable, Iterator, Sequence
 
 from ..context import Check, CheckContext
 from ..findings import Location, Violation, evidence
 from ..manifest import VrRef
 from ..model import ModelDescription, Unknown, Variable
-from ..structure import BipartitePattern, DulmageMendelsohn, dulmage_mendelsohn
+
+if TYPE_CHECKING:
+    from ..structure import DulmageMendelsohn
 
 log = logging.getLogger(__name__)
 
@@ -123,6 +125,26 @@ def _resolve(refs: Sequence[VrRef | Unknown], model: ModelDescription
     return list(out.values())
 
 
+def _greedy_matching_size(row_deps: Sequence[list[int] | None], n_cols: int) -> int:
+    """Size of a greedy matching: each row takes its first free column, full rows take what is
+    left. Any matching is at most maximum, so when this one already has full size the graph
+    is structurally non-singular; it does for the usual near-diagonal patterns, which spares
+    loading scipy. Otherwise Hopcroft-Karp and Dulmage-Mendelsohn decide (conformance.structure).
+    """
+    taken = bytearray(n_cols)
+    size = full = 0
+    for deps in row_deps:
+        if deps is None:
+            full += 1
+            continue
+        for c in deps:
+            if not taken[c]:
+                taken[c] = 1
+                size += 1
+                break
+    return size + min(full, n_cols - size)
+
+
 def index1_structurally_singular(ctx: CheckContext, *, max_names: int = 5,
                                  max_evidence: int = 100, max_edges: int = 5_000_000
                                  ) -> Iterator[Violation]:
@@ -157,8 +179,12 @@ def index1_structurally_singular(ctx: CheckContext, *, max_names: int = 5,
             return
         rows.add(var, size)
         row_deps.extend([mine] * size)
-    dm = dulmage_mendelsohn(BipartitePattern.from_rows(row_deps, len(cols)))
     needed = min(len(rows), len(cols))
+    if _greedy_matching_size(row_deps, len(cols)) >= needed:
+        return  # a matching of full size was found without the graph machinery
+    from ..structure import BipartitePattern, dulmage_mendelsohn  # scipy: only when needed
+
+    dm = dulmage_mendelsohn(BipartitePattern.from_rows(row_deps, len(cols)))
     if dm.rank >= needed:
         return
     yield _violation(dm, needed, rows, cols, [r for r, _ in residuals],

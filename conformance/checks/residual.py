@@ -59,10 +59,15 @@ def _classified(ctx: CheckContext, wanted: str) -> Iterator[tuple[Unknown, Varia
     model, manifest = ctx.model, ctx.manifest
     if model is None or manifest is None:
         return
-    states = continuous_states(model, manifest)
-    for res, var in _listed(model, manifest):
-        if residual_problem(var, states=states) == wanted:
-            yield res, var
+
+    def classify() -> dict[str | None, list[tuple[Unknown, Variable]]]:
+        states = continuous_states(model, manifest)
+        classes: dict[str | None, list[tuple[Unknown, Variable]]] = {}
+        for res, var in _listed(model, manifest):
+            classes.setdefault(residual_problem(var, states=states), []).append((res, var))
+        return classes
+
+    yield from ctx.memo("residual-classes", classify).get(wanted, ())
 
 
 def _at(res: Unknown) -> Location:

@@ -65,6 +65,18 @@ def test_structural_rank_equals_numerical_rank_of_a_generic_matrix(pat, seed):
 
 
 @settings(max_examples=200, deadline=None)
+@given(patterns())
+def test_greedy_prepass_never_exceeds_the_maximum_matching(pat):
+    # The index-1 check trusts a full-size greedy matching without calling scipy; that is
+    # sound only because a greedy matching is a matching, so never larger than a maximum one.
+    from conformance.checks.index1 import _greedy_matching_size
+
+    dense, full = pat
+    rows = [None if full[i] else np.flatnonzero(dense[i]).tolist() for i in range(dense.shape[0])]
+    greedy = _greedy_matching_size(rows, dense.shape[1])
+    assert greedy <= structural_rank(_pattern(dense, full))
+
+
 @given(patterns(full_rows=False))
 def test_structural_rank_agrees_with_scipy(pat):
     dense, _ = pat

@@ -7,7 +7,9 @@ from __future__ import annotations
 import argparse
 import logging
 import os
+import socket
 import sys
+from datetime import datetime, timezone
 from pathlib import Path
 from typing import Sequence
 
@@ -16,8 +18,9 @@ from .catalogue import Catalogue, CatalogueError, RuleSpec, default_catalogue
 from .config import ConfigError, load_config
 from .drafts import ALL_DRAFTS, DRAFT_LABELS
 from .engine import EngineOptions, check_paths
-from .findings import Severity
+from .findings import RunInfo, Severity
 from .reporters import REPORTER_BY_NAME
+from .ruledocs import render_markdown
 
 EXIT_OK, EXIT_FINDINGS, EXIT_USAGE = 0, 1, 2
 
@@ -53,8 +56,13 @@ def _parser() -> argparse.ArgumentParser:
                        help="override a rule's severity (info, warning, error)")
     check.add_argument("--draft", default=None, choices=("auto", *ALL_DRAFTS),
                        help="which fmi-ls-dae draft to check against (default: auto-detect)")
-    check.add_argument("--no-probes", action="store_true",
-                       help="static checks only: do not load the FMU's binary")
+    probes = check.add_mutually_exclusive_group()
+    probes.add_argument("--no-probes", action="store_true",
+                        help="static checks only: do not load the FMU's binary")
+    probes.add_argument("--probes-only", action="store_true",
+                        help="skip the schema and static rules; run the dynamic probes")
+    check.add_argument("--seed", type=int, default=0,
+                       help="seed for the probes' sampled points (recorded in the report)")
     check.add_argument("--config", type=Path, metavar="PYPROJECT",
                        help="read [tool.lsdae] from this file instead of the nearest pyproject")
     check.add_argument("--color", choices=("auto", "always", "never"), default="auto")
@@ -90,6 +98,7 @@ def _options(args: argparse.Namespace) -> EngineOptions:
         severity=tuple(severity.items()),
         draft=args.draft or config.get("draft", "auto"),
         probes=not args.no_probes and bool(config.get("probes", True)),
+        probes_only=args.probes_only, seed=args.seed,
     )
 
 
@@ -121,13 +130,26 @@ def cmd_check(args: argparse.Namespace) -> int:
     catalogue = default_catalogue()
     options = _options(args)
     outputs = _outputs(args)
+    durations: dict[str, float] = {}
+    started = datetime.now(timezone.utc).replace(microsecond=0).isoformat()
     try:
-        report = check_paths(args.paths, options=options, catalogue=catalogue)
+        report = check_paths(args.paths, options=options, catalogue=catalogue,
+                             durations=durations)
     except ValueError as exc:  # a bad --select/--ignore pattern
         raise UsageError(str(exc)) from None
-    failed_write = False
-    for name, file in outputs:
-        text = REPORTER_BY_NAME[name](report, catalogue, color=_use_color(args.color, file))
+    run = RunInfo(timestamp=started, hostname=socket.gethostname(),
+                  durations=tuple(durations.items()))
+    failed = False
+    for name, file in outputs:  # each format on its own: one failing never loses the others
+        try:
+            text = REPORTER_BY_NAME[name](report, catalogue, color=_use_color(args.color, file),
+                                          run=run)
+        except Exception as exc:
+            logging.getLogger(__name__).debug("reporter %s failed", name, exc_info=True)
+            print(f"lsdae: internal error in the {name} reporter: {type(exc).__name__}: {exc}",
+                  file=sys.stderr)
+            failed = True
+            continue
         if file is None or file == "-":
             sys.stdout.write(text)
             continue
@@ -136,8 +158,8 @@ def cmd_check(args: argparse.Namespace) -> int:
             Path(file).write_text(text, encoding="utf-8")
         except OSError as exc:
             print(f"lsdae: cannot write {file}: {exc}", file=sys.stderr)
-            failed_write = True
-    if failed_write:
+            failed = True
+    if failed:
         return EXIT_USAGE
     return EXIT_FINDINGS if report.has_at_least(Severity.ERROR) else EXIT_OK
 
@@ -149,10 +171,7 @@ def _rule_line(rule: RuleSpec) -> str:
 def cmd_rules(args: argparse.Namespace) -> int:
     catalogue = default_catalogue()
     if args.format == "markdown":
-        print("| code | name | severity | stage | summary |\n|---|---|---|---|---|")
-        for rule in catalogue:
-            print(f"| {rule.code} | `{rule.name}` | {rule.severity} | {rule.stage} | "
-                  f"{rule.summary} |")
+        sys.stdout.write(render_markdown(catalogue))
     else:
         for rule in catalogue:
             print(_rule_line(rule))

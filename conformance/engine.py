@@ -10,6 +10,7 @@ from __future__ import annotations
 import contextlib
 import gc
 import logging
+import time
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Iterable, Iterator, Sequence
@@ -41,6 +42,8 @@ class EngineOptions:
     severity: tuple[tuple[str, str], ...] = ()
     draft: str = "auto"
     probes: bool = True
+    probes_only: bool = False
+    seed: int = 0
     group_threshold: int = 3
 
 
@@ -206,13 +209,34 @@ def _run(path: Path, options: EngineOptions, catalogue: Catalogue, selection: Ru
         return
     with source:
         names = tuple(source.names())
-        model = _read_model(source, names, collector, texts)
+        model = _read_model(source, names, options, collector, texts)
         manifest = _read_manifest(source, names, options, collector, texts, state)
-    if model is not None:
-        state.info.update(model_name=model.model_name, fmi_version=model.fmi_version,
-                          variables=len(model.variables))
-    ctx = CheckContext(model=model, manifest=manifest, draft=state.draft, names=names)
-    _run_static(ctx, catalogue, selection, collector, state)
+        if model is not None:
+            state.info.update(model_name=model.model_name, fmi_version=model.fmi_version,
+                              variables=len(model.variables))
+        ctx = CheckContext(model=model, manifest=manifest, draft=state.draft, names=names)
+        if not options.probes_only:
+            _run_static(ctx, catalogue, selection, collector, state)
+        _run_probe_stage(source, ctx, options, catalogue, selection, collector, state)
+
+
+def _run_probe_stage(source, ctx: CheckContext, options: EngineOptions, catalogue: Catalogue,
+                     selection: RuleSelection, collector: _Collector, state: _State) -> None:
+    """Dynamic probes: load the binary in a worker process (conformance.probes)."""
+    rules = [r for r in catalogue if r.stage == "probe" and r.code in selection.enabled]
+    if not rules:
+        return
+    if not options.probes:
+        state.skipped.update((r.code, "probes turned off (--no-probes)") for r in rules)
+        return
+    from .probes import run_probes  # numpy and the worker machinery only when probing
+
+    outcome = run_probes(source, ctx, rules, seed=options.seed)
+    for code, violation in outcome.violations:
+        collector.add(catalogue[code], [violation])
+    state.run.update(outcome.run)
+    state.skipped.update(outcome.skipped)
+    state.info.update(outcome.info)
 
 
 def _read(source, name: str, collector: _Collector) -> bytes | None:
@@ -226,7 +250,7 @@ def _read(source, name: str, collector: _Collector) -> bytes | None:
     return None
 
 
-def _read_model(source, names: Sequence[str], collector: _Collector,
+def _read_model(source, names: Sequence[str], options: EngineOptions, collector: _Collector,
                 texts: dict[str, bytes]) -> ModelDescription | None:
     if MODEL_DESCRIPTION not in names:
         collector.emit("model-description-missing", Violation(
@@ -240,7 +264,8 @@ def _read_model(source, names: Sequence[str], collector: _Collector,
     collector.add_stage(violations)
     if tree is None:
         return None
-    collector.add_stage(validate_model_description(tree))
+    if not options.probes_only:
+        collector.add_stage(validate_model_description(tree))
     return read_model_description(tree, file=MODEL_DESCRIPTION)
 
 
@@ -265,8 +290,9 @@ def _read_manifest(source, names: Sequence[str], options: EngineOptions, collect
     if draft == UNKNOWN:
         collector.add_stage(unrecognised_violations(tree.getroot(), file=MANIFEST))
         return None
-    collector.add_stage(validate_manifest(tree, draft, file=MANIFEST))
-    collector.add_stage(legacy_violations(tree.getroot(), draft, file=MANIFEST))
+    if not options.probes_only:
+        collector.add_stage(validate_manifest(tree, draft, file=MANIFEST))
+        collector.add_stage(legacy_violations(tree.getroot(), draft, file=MANIFEST))
     return read_manifest(tree, draft=draft, file=MANIFEST)
 
 
@@ -298,11 +324,20 @@ def _run_static(ctx: CheckContext, catalogue: Catalogue, selection: RuleSelectio
 
 
 def check_paths(paths: Sequence[Path | str], *, options: EngineOptions = EngineOptions(),
-                catalogue: Catalogue | None = None) -> Report:
+                catalogue: Catalogue | None = None,
+                durations: dict[str, float] | None = None) -> Report:
+    """Check every path in order; ``durations``, when given, receives seconds per path."""
     catalogue = catalogue or default_catalogue()
     RuleSelection(catalogue, options)  # fail early on a bad --select / --ignore
-    fmus = tuple(check_fmu(Path(p), options=options, catalogue=catalogue, display_path=str(p))
-                 for p in paths)
+    reports = []
+    for p in paths:
+        start = time.perf_counter()
+        reports.append(check_fmu(Path(p), options=options, catalogue=catalogue,
+                                 display_path=str(p)))
+        if durations is not None:
+            durations[str(p)] = time.perf_counter() - start
+    fmus = tuple(reports)
     return Report(tool_version=__version__, fmus=fmus, options=evidence(
         draft=options.draft, select=list(options.select), ignore=list(options.ignore),
-        severity=[f"{k}={v}" for k, v in options.severity], probes=options.probes))
+        severity=[f"{k}={v}" for k, v in options.severity], probes=options.probes,
+        probes_only=options.probes_only, seed=options.seed))

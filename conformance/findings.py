@@ -133,3 +133,19 @@ class Report:
 
     def has_at_least(self, severity: Severity) -> bool:
         return any(f.severity >= severity for f in self.all_findings())
+
+
+@dataclass(frozen=True, slots=True)
+class RunInfo:
+    """Facts about one run that are not part of the findings: when, where, how long.
+
+    Passed to reporters next to the report (JUnit and HTML show them), never stored in it, so
+    the report itself, and the JSON written from it, is the same for the same input.
+    """
+
+    timestamp: str | None = None               # ISO 8601, when the run started
+    hostname: str | None = None
+    durations: tuple[tuple[str, float], ...] = ()  # (FMU path, seconds)
+
+    def duration(self, path: str) -> float:
+        return dict(self.durations).get(path, 0.0)

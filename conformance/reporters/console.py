@@ -10,7 +10,8 @@ _COLOURS = {Severity.ERROR: "\033[1;31m", Severity.WARNING: "\033[1;33m",
 _BOLD, _DIM, _RESET = "\033[1m", "\033[2m", "\033[0m"
 
 
-def render(report: Report, catalogue: Catalogue | None = None, *, color: bool = False) -> str:
+def render(report: Report, catalogue: Catalogue | None = None, *, color: bool = False,
+           **_: object) -> str:
     out: list[str] = []
     for fmu in report.fmus:
         out.extend(_fmu(fmu, color))

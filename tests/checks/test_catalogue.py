@@ -40,3 +40,13 @@ def test_rule_has_failing_and_passing_fixture(rule):
     kinds = {p.name.split("-")[0] for p in folder.iterdir()} if folder.is_dir() else set()
     assert "fail" in kinds, f"{rule.code} {rule.name} has no failing fixture in {folder}"
     assert "pass" in kinds, f"{rule.code} {rule.name} has no passing fixture in {folder}"
+
+
+def test_rule_docs_are_current():
+    from pathlib import Path
+
+    from conformance.ruledocs import render_markdown
+
+    docs = Path(__file__).resolve().parents[2] / "docs" / "rules.md"
+    assert docs.read_text(encoding="utf-8") == render_markdown(CATALOGUE), (
+        "docs/rules.md is stale: run `lsdae rules --format markdown > docs/rules.md`")

@@ -90,3 +90,26 @@ def test_rules_and_explain(capsys):
     text = capsys.readouterr().out
     assert "DAE091" in text and "Spec:" in text
     assert main(["explain", "dae091"]) == 0
+
+
+def test_a_failing_reporter_does_not_lose_the_other_outputs(scene, tmp_path, monkeypatch, capsys):
+    from conformance import reporters
+
+    def broken(report, catalogue, **_):
+        raise RuntimeError("boom")
+
+    monkeypatch.setitem(reporters.REPORTER_BY_NAME, "console", broken)
+    out = tmp_path / "r.json"
+    assert main(["check", scene(), "--no-probes", "--format", "console",
+                 "--format", f"json:{out}"]) == 2
+    assert json.loads(out.read_text())["fmus"]
+    err = capsys.readouterr().err
+    assert "console reporter" in err and "Traceback" not in err
+
+
+def test_unwritable_output_is_a_clear_error(scene, tmp_path, capsys):
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    assert main(["check", scene(), "--no-probes", "--format", "json",
+                 "-o", str(blocker / "sub" / "r.json")]) == 2
+    assert "cannot write" in capsys.readouterr().err

@@ -19,6 +19,8 @@ from __future__ import annotations
 import logging
 import re
 
+from dataclasses import replace
+
 from lxml import etree
 
 from conformance.drafts import LS_NAMESPACE
@@ -77,11 +79,14 @@ def parse_xml(
     declaration is reported (AR-04 asks it of modelDescription.xml). Never raises.
     """
     try:
-        return _parse(bytes(data), file=file, require_declaration=require_declaration)
+        tree, violations = _parse(bytes(data), file=file, require_declaration=require_declaration)
     except Exception as exc:  # untrusted input: anything unexpected is a finding, not a crash
         log.debug("unexpected failure parsing %s", file, exc_info=True)
         message = f"cannot be parsed: {type(exc).__name__}: {exc}"
-        return None, [Violation(message, Location(file=file), rule=NOT_WELL_FORMED)]
+        tree, violations = None, [Violation(message, Location(file=file), rule=NOT_WELL_FORMED)]
+    # The messages above are predicates ("is not well-formed ..."); name their subject.
+    name = file.rsplit("/", 1)[-1]
+    return tree, [replace(v, message=f"{name} {v.message}") for v in violations]
 
 
 def _parse(

@@ -35,7 +35,12 @@ def _fmu(fmu: FmuReport, color: bool) -> list[str]:
     for finding in fmu.findings:
         lines.extend(_finding(fmu, finding, color))
         lines.append("")
-    draft = DRAFT_LABELS.get(fmu.draft, fmu.draft) if fmu.draft else "no fmi-ls-dae manifest"
+    if fmu.draft:
+        draft = DRAFT_LABELS.get(fmu.draft, fmu.draft)
+    elif dict(fmu.info).get("manifest"):
+        draft = f"fmi-ls-dae manifest {dict(fmu.info)['manifest']}"
+    else:
+        draft = "no fmi-ls-dae manifest"
     summary = (f"{fmu.path}: {draft}; {_plural(fmu.count(Severity.ERROR), 'error')}, "
                f"{_plural(fmu.count(Severity.WARNING), 'warning')}, "
                f"{fmu.count(Severity.INFO)} info")

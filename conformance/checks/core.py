@@ -1,9 +1,11 @@
-"""Static checks: the core FMI 3.0 modelDescription rules that DAE use depends on (DAE5xx).
+"""Static checks: the core FMI 3.0 variable rules that DAE use depends on (DAE501-DAE509).
 
 These run on every FMU that has a modelDescription, with or without a manifest: an fmi-ls-dae FMU
 must first be a correct Model Exchange FMU (LS-04), and the DAE rules build on value references,
 states and the ModelStructure being right. Every check is one linear pass over the variables and
-the ModelStructure with dicts and sets, so a model with 100,000 variables costs milliseconds.
+the ModelStructure with dicts and sets, so a model with 100,000 variables costs milliseconds. The
+core ModelStructure rules (DAE510-DAE514) are in :mod:`.core_structure`; both modules share the
+one-pass analysis :func:`analyse` defined here.
 
 Where a more basic rule explains a problem, the later rules stay quiet: an invalid
 causality/variability pair silences the ``initial`` and ``start`` rules for that variable, the
@@ -53,11 +55,13 @@ def _allowed_initial(causality: str, variability: str) -> frozenset[str]:
     return INITIALS if causality in ("output", "local") else _NONE
 
 
-def _var_loc(model: ModelDescription, var: Variable) -> Location:
+def var_loc(model: ModelDescription, var: Variable) -> Location:
+    """Where a variable is declared in modelDescription.xml."""
     return Location(file=model.file, line=var.line, path=var.path)
 
 
-def _unknown_loc(u: Unknown) -> Location:
+def unknown_loc(u: Unknown) -> Location:
+    """Where a ModelStructure element is."""
     return Location(file=u.file, line=u.line, path=u.path)
 
 
@@ -112,7 +116,7 @@ def _verdict(type_: str, c: str, v: str, declared_initial: str | None, initial: 
 
 
 class _Analysis:
-    """One pass over a model shared by all rules of this module.
+    """One pass over a model shared by all rules of this module and of :mod:`.core_structure`.
 
     Variables are judged per attribute signature (type, causality, variability, initial, ...),
     which a model repeats thousands of times, so the per-variable cost is one dict lookup.
@@ -152,7 +156,7 @@ class _Analysis:
 _last: tuple[weakref.ref, _Analysis] | None = None
 
 
-def _analyse(model: ModelDescription) -> _Analysis:
+def analyse(model: ModelDescription) -> _Analysis:
     """The analysis of ``model``, computed once and reused while the same model is checked."""
     global _last
     cached = _last
@@ -190,7 +194,7 @@ def value_reference_duplicate(ctx: CheckContext) -> Iterator[Violation]:
             yield Violation(
                 "valueReference already used by an earlier variable, reused by {subject}; give "
                 "every variable its own valueReference (FMI 3.0 aliases are <Alias> children)",
-                _var_loc(model, var),
+                var_loc(model, var),
                 evidence(value_reference=var.vr, first_variable=owner.name,
                          first_line=owner.line),
                 subject=var.name)
@@ -261,11 +265,11 @@ def causality_variability_invalid(ctx: CheckContext) -> Iterator[Violation]:
     if (model := ctx.model) is None:
         return
     enable = _enable_vrs(ctx)
-    for var, (fault, _, _) in _analyse(model).verdicts:
+    for var, (fault, _, _) in analyse(model).verdicts:
         if fault is None or var.vr in enable:
             continue
         yield Violation(
-            _VARIABILITY_MESSAGES[fault], _var_loc(model, var),
+            _VARIABILITY_MESSAGES[fault], var_loc(model, var),
             evidence(fault=fault, type=var.type, causality=var.causality,
                      variability=var.variability,
                      variability_declared=var.declared_variability is not None,
@@ -277,14 +281,14 @@ def initial_invalid(ctx: CheckContext) -> Iterator[Violation]:
     """DAE505 MV-20: a declared ``initial`` is allowed for the causality and variability."""
     if (model := ctx.model) is None:
         return
-    for var, (_, initial_bad, _) in _analyse(model).verdicts:
+    for var, (_, initial_bad, _) in analyse(model).verdicts:
         if not initial_bad:
             continue
         allowed = sorted(_allowed_initial(var.causality, var.variability))
         yield Violation(
             "initial not allowed for the causality and variability of {subject}; use an "
             "allowed value (see the evidence) or remove the attribute",
-            _var_loc(model, var),
+            var_loc(model, var),
             evidence(initial=var.declared_initial, causality=var.causality,
                      variability=var.variability, allowed=allowed),
             subject=var.name)
@@ -295,12 +299,12 @@ def start_missing(ctx: CheckContext) -> Iterator[Violation]:
     if (model := ctx.model) is None:
         return
     enable = _enable_vrs(ctx)
-    for var, (_, _, problem) in _analyse(model).verdicts:
+    for var, (_, _, problem) in analyse(model).verdicts:
         if problem is not None and problem[0] == "missing" and var.vr not in enable:
             yield Violation(
                 "no start value for {subject}, which FMI 3.0 requires for inputs, parameters, "
                 "constants and initial exact or approx; add a start value",
-                _var_loc(model, var),
+                var_loc(model, var),
                 evidence(required_by=problem[1], causality=var.causality,
                          variability=var.variability, initial=var.initial),
                 subject=var.name)
@@ -310,13 +314,13 @@ def start_not_allowed(ctx: CheckContext) -> Iterator[Violation]:
     """DAE507 MV-21: start is forbidden for initial=calculated."""
     if (model := ctx.model) is None:
         return
-    for var, (_, _, problem) in _analyse(model).verdicts:
+    for var, (_, _, problem) in analyse(model).verdicts:
         if problem is None or problem[0] != "not-allowed":
             continue
         yield Violation(
             "start value on {subject}, whose initial is \"calculated\"; remove the start "
             "value, or declare initial=\"approx\" if it is a guess value",
-            _var_loc(model, var),
+            var_loc(model, var),
             evidence(start=var.start, causality=var.causality, variability=var.variability,
                      initial_declared=var.declared_initial is not None),
             subject=var.name)
@@ -326,7 +330,7 @@ def independent_variable_invalid(ctx: CheckContext) -> Iterator[Violation]:
     """DAE508 MV-13: exactly one independent variable, a continuous float, no start/initial."""
     if (model := ctx.model) is None:
         return
-    independents = _analyse(model).independents
+    independents = analyse(model).independents
     if not independents:
         yield Violation(
             "modelDescription.xml has no variable with causality=\"independent\"; FMI 3.0 "
@@ -340,7 +344,7 @@ def independent_variable_invalid(ctx: CheckContext) -> Iterator[Violation]:
         yield Violation(
             "causality=\"independent\" on {subject} besides the first independent variable; "
             "FMI 3.0 allows exactly one, make the others local",
-            _var_loc(model, var),
+            var_loc(model, var),
             evidence(first_independent=first.name, count=len(independents)),
             subject=var.name)
     problems = [text for text, bad in (
@@ -352,7 +356,7 @@ def independent_variable_invalid(ctx: CheckContext) -> Iterator[Violation]:
         yield Violation(
             "independent variable {subject} must be a continuous Float32/Float64 without start "
             "or initial attributes; fix the attributes listed in the evidence",
-            _var_loc(model, first),
+            var_loc(model, first),
             evidence(problems=problems, type=first.type, variability=first.variability),
             subject=first.name)
 
@@ -363,22 +367,22 @@ def derivative_invalid(ctx: CheckContext) -> Iterator[Violation]:
     if (model := ctx.model) is None:
         return
     by_vr = model.by_vr
-    for var in _analyse(model).derivatives:
+    for var in analyse(model).derivatives:
         target = by_vr.get(var.derivative)  # type: ignore[arg-type]
         if target is None:
             yield Violation(
                 "derivative attribute naming a valueReference that no variable has, on "
                 "{subject}; point it at the variable this one is the derivative of",
-                _var_loc(model, var), evidence(derivative=var.derivative), subject=var.name)
+                var_loc(model, var), evidence(derivative=var.derivative), subject=var.name)
         elif not target.is_float:
             yield Violation(
                 "derivative attribute naming a variable that is not a Float32/Float64, on "
                 "{subject}; derivatives can only be of floating-point variables",
-                _var_loc(model, var),
+                var_loc(model, var),
                 evidence(derivative=var.derivative, target=target.name, target_type=target.type),
                 subject=var.name)
     states: dict[int, tuple[Unknown, Variable]] = {}  # state vr -> first CSD naming it
-    for u in _analyse(model).unknowns("ContinuousStateDerivative"):
+    for u in analyse(model).unknowns("ContinuousStateDerivative"):
         der = by_vr.get(u.vr) if u.vr is not None else None
         if der is None:
             continue  # model-structure-unknown-vr
@@ -386,7 +390,7 @@ def derivative_invalid(ctx: CheckContext) -> Iterator[Violation]:
             yield Violation(
                 "<ContinuousStateDerivative> without a derivative attribute: {subject}; add "
                 "derivative=\"<valueReference of its state>\"",
-                _var_loc(model, der),
+                var_loc(model, der),
                 evidence(value_reference=der.vr, type=der.type, structure_line=u.line),
                 subject=der.name)
             continue
@@ -397,7 +401,7 @@ def derivative_invalid(ctx: CheckContext) -> Iterator[Violation]:
             yield Violation(
                 "<ContinuousStateDerivative> that is, or whose state is, not continuous: "
                 "{subject}; states and their derivatives must be continuous floats",
-                _var_loc(model, der),
+                var_loc(model, der),
                 evidence(derivative_variability=der.variability, state=state.name,
                          state_variability=state.variability),
                 subject=der.name)
@@ -408,171 +412,10 @@ def derivative_invalid(ctx: CheckContext) -> Iterator[Violation]:
             yield Violation(
                 "<ContinuousStateDerivative> naming a state that an earlier one already "
                 "names: {subject}; list every state exactly once",
-                _unknown_loc(u),
+                unknown_loc(u),
                 evidence(state=state.name, earlier_derivative=earlier.name,
                          earlier_line=earlier_u.line, value_reference=der.vr),
                 subject=der.name)
-
-
-def _unknown_subject(model: ModelDescription, u: Unknown) -> str:
-    var = model.by_vr.get(u.vr) if u.vr is not None else None
-    return var.name if var is not None else f"{u.kind} valueReference={u.vr}"
-
-
-def model_structure_unknown_vr(ctx: CheckContext) -> Iterator[Violation]:
-    """DAE510 MV-03: every valueReference and dependency in the core ModelStructure resolves."""
-    if (model := ctx.model) is None:
-        return
-    by_vr = model.by_vr
-    for u in model.structure:
-        if u.vr is not None and u.vr not in by_vr:
-            yield Violation(
-                "ModelStructure element naming a valueReference that no variable has: "
-                "{subject}; list only existing variables",
-                _unknown_loc(u), evidence(kind=u.kind, value_reference=u.vr),
-                subject=f"{u.kind} valueReference={u.vr}")
-        missing = [d for d in (u.dependencies or ()) if d not in by_vr]
-        if missing:
-            yield Violation(
-                "dependencies naming value references that no variable has, in the "
-                "ModelStructure element of {subject}; list only existing variables",
-                _unknown_loc(u), evidence(kind=u.kind, missing=sorted(set(missing))),
-                subject=_unknown_subject(model, u))
-
-
-def _listed(model: ModelDescription, kind: str) -> Iterator[tuple[Unknown, Variable]]:
-    """Resolved elements of one ModelStructure kind (unresolved ones are DAE510's)."""
-    by_vr = model.by_vr
-    for u in _analyse(model).unknowns(kind):
-        var = by_vr.get(u.vr) if u.vr is not None else None
-        if var is not None:
-            yield u, var
-
-
-def _set_mismatch(model: ModelDescription, kind: str, expected: dict[int, str],
-                  allowed_extra: set[int], messages: tuple[str, str, str]
-                  ) -> Iterator[Violation]:
-    """Compare a ModelStructure list with the set it must equal; yield extra/duplicate/missing."""
-    not_member, duplicate, missing = messages
-    seen: set[int] = set()
-    for u, var in _listed(model, kind):
-        vr = var.vr
-        if vr in seen:
-            yield Violation(duplicate, _unknown_loc(u), evidence(kind=kind, value_reference=vr),
-                            subject=var.name)
-            continue
-        seen.add(vr)  # type: ignore[arg-type]
-        if vr not in expected and vr not in allowed_extra:
-            yield Violation(not_member, _unknown_loc(u),
-                            evidence(kind=kind, value_reference=vr, causality=var.causality,
-                                     variability=var.variability, initial=var.initial),
-                            subject=var.name)
-    for vr, reason in expected.items():
-        if vr not in seen:
-            var = model.by_vr[vr]
-            yield Violation(missing, _var_loc(model, var),
-                            evidence(kind=kind, value_reference=vr, reason=reason),
-                            subject=var.name)
-
-
-def model_structure_output_mismatch(ctx: CheckContext) -> Iterator[Violation]:
-    """DAE511 MS-02: the <Output> elements are exactly the outputs, each listed once."""
-    if (model := ctx.model) is None:
-        return
-    expected = {v.vr: "causality=output" for v in _analyse(model).by_causality["output"]
-                if v.vr is not None and model.by_vr[v.vr] is v}
-    yield from _set_mismatch(model, "Output", expected, set(), (
-        "<Output> naming a variable whose causality is not \"output\": {subject}; list only "
-        "outputs under <Output>",
-        "<Output> listed twice: {subject}; list every output exactly once",
-        "output missing from the <Output> list: {subject}; add "
-        "<Output valueReference=\"...\"/> for every output",
-    ))
-
-
-def model_structure_derivative_missing(ctx: CheckContext) -> Iterator[Violation]:
-    """DAE512 MS-03: every state derivative is listed as <ContinuousStateDerivative>.
-
-    A variable counts as a state derivative when it and the variable its ``derivative`` names are
-    continuous floats, local or output, and not both outputs (MV-30 allows linking an output to
-    the output it is the derivative of without making either a state), and when no listed
-    derivative already covers that state.
-    """
-    if (model := ctx.model) is None:
-        return
-    by_vr = model.by_vr
-    listed: set[int] = set()
-    covered: set[int] = set()   # states that a listed derivative already names
-    for u, der in _listed(model, "ContinuousStateDerivative"):
-        listed.add(u.vr)  # type: ignore[arg-type]
-        if der.derivative is not None:
-            covered.add(der.derivative)
-    for var in _analyse(model).derivatives:
-        if var.vr in listed or var.derivative in covered:
-            continue
-        state = by_vr.get(var.derivative)  # type: ignore[arg-type]
-        if state is None or not (var.is_float and state.is_float):
-            continue
-        if var.variability != "continuous" or state.variability != "continuous":
-            continue
-        causalities = (var.causality, state.causality)
-        if not set(causalities) <= {"local", "output"} or causalities == ("output", "output"):
-            continue
-        covered.add(var.derivative)
-        yield Violation(
-            "state derivative not listed as <ContinuousStateDerivative>: {subject}; Model "
-            "Exchange must list every state derivative in the ModelStructure",
-            _var_loc(model, var),
-            evidence(value_reference=var.vr, state=state.name, state_value_reference=state.vr),
-            subject=var.name)
-
-
-def model_structure_initial_unknown_mismatch(ctx: CheckContext) -> Iterator[Violation]:
-    """DAE513 MS-05: InitialUnknown = (a) outputs, (b) calculatedParameters, (c) states/derivatives
-    whose initial is approx or calculated; (d) clocked variables may be added."""
-    if (model := ctx.model) is None:
-        return
-    by_vr = model.by_vr
-    analysis = _analyse(model)
-    expected: dict[int, str] = {}
-    for var in analysis.by_causality["output"]:
-        if (var.vr is not None and by_vr[var.vr] is var and var.clocks is None
-                and var.type != "Clock" and var.initial in ("approx", "calculated")):
-            expected[var.vr] = f"output with initial={var.initial}"
-    for var in analysis.by_causality["calculatedParameter"]:
-        if var.vr is not None and by_vr[var.vr] is var:
-            expected[var.vr] = "calculatedParameter"
-    for u, der in _listed(model, "ContinuousStateDerivative"):
-        state = by_vr.get(der.derivative) if der.derivative is not None else None
-        for var, role in ((der, "derivative"), (state, "state")):
-            if var is not None and var.vr is not None and var.initial in ("approx", "calculated"):
-                expected.setdefault(var.vr, f"{role} with initial={var.initial}")
-    yield from _set_mismatch(model, "InitialUnknown", expected, analysis.clocked_vrs, (
-        "<InitialUnknown> naming neither an output, calculated parameter, state or state "
-        "derivative with initial approx or calculated, nor a clocked variable: {subject}; "
-        "remove it",
-        "<InitialUnknown> listed twice: {subject}; list every initial unknown exactly once",
-        "missing from the <InitialUnknown> list: {subject}; outputs, calculated parameters, "
-        "states and derivatives with initial approx or calculated must be listed, add it",
-    ))
-
-
-def directional_derivatives_missing(ctx: CheckContext) -> Iterator[Violation]:
-    """DAE514 CF-05, DAE-50: a DAE FMU should provide directional derivatives for dg/dw."""
-    model, manifest = ctx.model, ctx.manifest
-    if model is None or manifest is None or model.model_exchange is None:
-        return
-    me = model.model_exchange
-    if me.flag("providesDirectionalDerivatives"):
-        return
-    yield Violation(
-        "the DAE FMU {subject} does not set providesDirectionalDerivatives=\"true\" on "
-        "<ModelExchange>; importers must then approximate the residual Jacobian by finite "
-        "differences, so implement fmi3GetDirectionalDerivative and set the flag",
-        Location(file=model.file, line=me.line, path="/fmiModelDescription/ModelExchange"),
-        evidence(model_identifier=me.model_identifier,
-                 provides_adjoint_derivatives=me.flag("providesAdjointDerivatives")),
-        subject=me.model_identifier)
 
 
 CHECKS: dict[str, Check] = {
@@ -585,9 +428,4 @@ CHECKS: dict[str, Check] = {
     "DAE507": start_not_allowed,
     "DAE508": independent_variable_invalid,
     "DAE509": derivative_invalid,
-    "DAE510": model_structure_unknown_vr,
-    "DAE511": model_structure_output_mismatch,
-    "DAE512": model_structure_derivative_missing,
-    "DAE513": model_structure_initial_unknown_mismatch,
-    "DAE514": directional_derivatives_missing,
 }

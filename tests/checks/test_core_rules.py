@@ -1,4 +1,5 @@
-"""Unit tests of the core modelDescription checks (conformance/checks/core.py, DAE5xx)."""
+"""Unit tests of the core modelDescription checks (conformance/checks/core.py and
+core_structure.py, DAE5xx)."""
 from __future__ import annotations
 
 import time
@@ -6,7 +7,7 @@ import time
 import pytest
 from lxml import etree
 
-from conformance.checks import core
+from conformance.checks import core, core_structure
 from conformance.context import CheckContext
 from conformance.manifest import read_manifest
 from conformance.model import read_model_description
@@ -55,8 +56,11 @@ def ctx_of(xml: str | None = None, *, manifest: str | None = None, **parts: str)
     return CheckContext(model=model, manifest=man, draft="alpha1" if man else None)
 
 
+CHECKS = {**core.CHECKS, **core_structure.CHECKS}
+
+
 def run(code: str, ctx: CheckContext) -> list:
-    return list(core.CHECKS[code](ctx))
+    return list(CHECKS[code](ctx))
 
 
 def subjects(code: str, ctx: CheckContext) -> list:
@@ -69,13 +73,13 @@ def ev(violation) -> dict:
 
 def test_base_model_is_clean():
     ctx = ctx_of(manifest=MANIFEST)
-    for code in core.CHECKS:
+    for code in CHECKS:
         assert run(code, ctx) == [], code
 
 
 def test_no_model_no_findings():
     ctx = CheckContext(model=None, manifest=None, draft=None)
-    for code in core.CHECKS:
+    for code in CHECKS:
         assert run(code, ctx) == []
 
 
@@ -466,6 +470,6 @@ def big_model_xml(n_blocks: int) -> str:
 def test_big_model_is_clean_and_linear():
     ctx = ctx_of(big_model_xml(2000), manifest=MANIFEST)
     t0 = time.perf_counter()
-    for code in core.CHECKS:
+    for code in CHECKS:
         assert run(code, ctx) == [], code
     assert time.perf_counter() - t0 < 0.5

@@ -1,0 +1,186 @@
+"""Static checks: the core FMI 3.0 ModelStructure rules that DAE use depends on (DAE510-DAE514).
+
+The ModelStructure of modelDescription.xml must resolve (DAE510) and list exactly the outputs,
+state derivatives and initial unknowns that the variables call for (DAE511-DAE513); a DAE FMU
+should also provide directional derivatives (DAE514). Each check is one linear pass over the
+ModelStructure, reusing the per-model analysis of :mod:`.core`. Unresolved value references are
+reported only by ``model-structure-unknown-vr``; the other rules skip them.
+"""
+from __future__ import annotations
+
+from collections.abc import Iterator
+
+from ..context import Check, CheckContext
+from ..findings import Location, Violation, evidence
+from ..model import ModelDescription, Unknown, Variable
+from .core import analyse, unknown_loc, var_loc
+
+
+def _unknown_subject(model: ModelDescription, u: Unknown) -> str:
+    var = model.by_vr.get(u.vr) if u.vr is not None else None
+    return var.name if var is not None else f"{u.kind} valueReference={u.vr}"
+
+
+def model_structure_unknown_vr(ctx: CheckContext) -> Iterator[Violation]:
+    """DAE510 MV-03: every valueReference and dependency in the core ModelStructure resolves."""
+    if (model := ctx.model) is None:
+        return
+    by_vr = model.by_vr
+    for u in model.structure:
+        if u.vr is not None and u.vr not in by_vr:
+            yield Violation(
+                "ModelStructure element naming a valueReference that no variable has: "
+                "{subject}; list only existing variables",
+                unknown_loc(u), evidence(kind=u.kind, value_reference=u.vr),
+                subject=f"{u.kind} valueReference={u.vr}")
+        missing = [d for d in (u.dependencies or ()) if d not in by_vr]
+        if missing:
+            yield Violation(
+                "dependencies naming value references that no variable has, in the "
+                "ModelStructure element of {subject}; list only existing variables",
+                unknown_loc(u), evidence(kind=u.kind, missing=sorted(set(missing))),
+                subject=_unknown_subject(model, u))
+
+
+def _listed(model: ModelDescription, kind: str) -> Iterator[tuple[Unknown, Variable]]:
+    """Resolved elements of one ModelStructure kind (unresolved ones are DAE510's)."""
+    by_vr = model.by_vr
+    for u in analyse(model).unknowns(kind):
+        var = by_vr.get(u.vr) if u.vr is not None else None
+        if var is not None:
+            yield u, var
+
+
+def _set_mismatch(model: ModelDescription, kind: str, expected: dict[int, str],
+                  allowed_extra: set[int], messages: tuple[str, str, str]
+                  ) -> Iterator[Violation]:
+    """Compare a ModelStructure list with the set it must equal; yield extra/duplicate/missing."""
+    not_member, duplicate, missing = messages
+    seen: set[int] = set()
+    for u, var in _listed(model, kind):
+        vr = var.vr
+        if vr in seen:
+            yield Violation(duplicate, unknown_loc(u), evidence(kind=kind, value_reference=vr),
+                            subject=var.name)
+            continue
+        seen.add(vr)  # type: ignore[arg-type]
+        if vr not in expected and vr not in allowed_extra:
+            yield Violation(not_member, unknown_loc(u),
+                            evidence(kind=kind, value_reference=vr, causality=var.causality,
+                                     variability=var.variability, initial=var.initial),
+                            subject=var.name)
+    for vr, reason in expected.items():
+        if vr not in seen:
+            var = model.by_vr[vr]
+            yield Violation(missing, var_loc(model, var),
+                            evidence(kind=kind, value_reference=vr, reason=reason),
+                            subject=var.name)
+
+
+def model_structure_output_mismatch(ctx: CheckContext) -> Iterator[Violation]:
+    """DAE511 MS-02: the <Output> elements are exactly the outputs, each listed once."""
+    if (model := ctx.model) is None:
+        return
+    expected = {v.vr: "causality=output" for v in analyse(model).by_causality["output"]
+                if v.vr is not None and model.by_vr[v.vr] is v}
+    yield from _set_mismatch(model, "Output", expected, set(), (
+        "<Output> naming a variable whose causality is not \"output\": {subject}; list only "
+        "outputs under <Output>",
+        "<Output> listed twice: {subject}; list every output exactly once",
+        "output missing from the <Output> list: {subject}; add "
+        "<Output valueReference=\"...\"/> for every output",
+    ))
+
+
+def model_structure_derivative_missing(ctx: CheckContext) -> Iterator[Violation]:
+    """DAE512 MS-03: every state derivative is listed as <ContinuousStateDerivative>.
+
+    A variable counts as a state derivative when it and the variable its ``derivative`` names are
+    continuous floats, local or output, and not both outputs (MV-30 allows linking an output to
+    the output it is the derivative of without making either a state), and when no listed
+    derivative already covers that state.
+    """
+    if (model := ctx.model) is None:
+        return
+    by_vr = model.by_vr
+    listed: set[int] = set()
+    covered: set[int] = set()   # states that a listed derivative already names
+    for u, der in _listed(model, "ContinuousStateDerivative"):
+        listed.add(u.vr)  # type: ignore[arg-type]
+        if der.derivative is not None:
+            covered.add(der.derivative)
+    for var in analyse(model).derivatives:
+        if var.vr in listed or var.derivative in covered:
+            continue
+        state = by_vr.get(var.derivative)  # type: ignore[arg-type]
+        if state is None or not (var.is_float and state.is_float):
+            continue
+        if var.variability != "continuous" or state.variability != "continuous":
+            continue
+        causalities = (var.causality, state.causality)
+        if not set(causalities) <= {"local", "output"} or causalities == ("output", "output"):
+            continue
+        covered.add(var.derivative)
+        yield Violation(
+            "state derivative not listed as <ContinuousStateDerivative>: {subject}; Model "
+            "Exchange must list every state derivative in the ModelStructure",
+            var_loc(model, var),
+            evidence(value_reference=var.vr, state=state.name, state_value_reference=state.vr),
+            subject=var.name)
+
+
+def model_structure_initial_unknown_mismatch(ctx: CheckContext) -> Iterator[Violation]:
+    """DAE513 MS-05: InitialUnknown = (a) outputs, (b) calculatedParameters, (c) states/derivatives
+    whose initial is approx or calculated; (d) clocked variables may be added."""
+    if (model := ctx.model) is None:
+        return
+    by_vr = model.by_vr
+    analysis = analyse(model)
+    expected: dict[int, str] = {}
+    for var in analysis.by_causality["output"]:
+        if (var.vr is not None and by_vr[var.vr] is var and var.clocks is None
+                and var.type != "Clock" and var.initial in ("approx", "calculated")):
+            expected[var.vr] = f"output with initial={var.initial}"
+    for var in analysis.by_causality["calculatedParameter"]:
+        if var.vr is not None and by_vr[var.vr] is var:
+            expected[var.vr] = "calculatedParameter"
+    for u, der in _listed(model, "ContinuousStateDerivative"):
+        state = by_vr.get(der.derivative) if der.derivative is not None else None
+        for var, role in ((der, "derivative"), (state, "state")):
+            if var is not None and var.vr is not None and var.initial in ("approx", "calculated"):
+                expected.setdefault(var.vr, f"{role} with initial={var.initial}")
+    yield from _set_mismatch(model, "InitialUnknown", expected, analysis.clocked_vrs, (
+        "<InitialUnknown> naming neither an output, calculated parameter, state or state "
+        "derivative with initial approx or calculated, nor a clocked variable: {subject}; "
+        "remove it",
+        "<InitialUnknown> listed twice: {subject}; list every initial unknown exactly once",
+        "missing from the <InitialUnknown> list: {subject}; outputs, calculated parameters, "
+        "states and derivatives with initial approx or calculated must be listed, add it",
+    ))
+
+
+def directional_derivatives_missing(ctx: CheckContext) -> Iterator[Violation]:
+    """DAE514 CF-05, DAE-50: a DAE FMU should provide directional derivatives for dg/dw."""
+    model, manifest = ctx.model, ctx.manifest
+    if model is None or manifest is None or model.model_exchange is None:
+        return
+    me = model.model_exchange
+    if me.flag("providesDirectionalDerivatives"):
+        return
+    yield Violation(
+        "the DAE FMU {subject} does not set providesDirectionalDerivatives=\"true\" on "
+        "<ModelExchange>; importers must then approximate the residual Jacobian by finite "
+        "differences, so implement fmi3GetDirectionalDerivative and set the flag",
+        Location(file=model.file, line=me.line, path="/fmiModelDescription/ModelExchange"),
+        evidence(model_identifier=me.model_identifier,
+                 provides_adjoint_derivatives=me.flag("providesAdjointDerivatives")),
+        subject=me.model_identifier)
+
+
+CHECKS: dict[str, Check] = {
+    "DAE510": model_structure_unknown_vr,
+    "DAE511": model_structure_output_mismatch,
+    "DAE512": model_structure_derivative_missing,
+    "DAE513": model_structure_initial_unknown_mismatch,
+    "DAE514": directional_derivatives_missing,
+}

@@ -7,6 +7,10 @@ ignore = ["ls-description-mismatch"]
 severity = { DAE302 = "warning" }
 draft = "auto"
 probes = true
+fail-on = "error"        # error | warning | never: the least severity that fails the run
+exit-zero = false        # exit 0 even with failing findings (usage errors still exit 2)
+baseline = "lsdae-baseline.json"   # relative to this pyproject.toml
+jobs = 4                 # FMUs checked in parallel processes
 ```
 """
 from __future__ import annotations
@@ -21,7 +25,9 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
-KEYS = {"select", "ignore", "severity", "draft", "probes"}
+KEYS = {"select", "ignore", "severity", "draft", "probes", "fail-on", "exit-zero", "baseline",
+        "jobs"}
+FAIL_ON = ("error", "warning", "never")
 
 
 class ConfigError(Exception):
@@ -68,4 +74,21 @@ def load_config(path: Path | None = None, *, start: Path | None = None) -> FileC
             raise ConfigError(f"{path}: [tool.lsdae] {key} must be a list of strings")
     if "severity" in table and not isinstance(table["severity"], dict):
         raise ConfigError(f"{path}: [tool.lsdae] severity must be a table CODE = \"level\"")
-    return FileConfig(Path(path), dict(table))
+    values = dict(table)
+    _check_run_keys(values, Path(path))
+    return FileConfig(Path(path), values)
+
+
+def _check_run_keys(values: dict[str, Any], path: Path) -> None:
+    """Validate the keys that decide the exit code and the run; resolve the baseline path."""
+    if "fail-on" in values and values["fail-on"] not in FAIL_ON:
+        raise ConfigError(f"{path}: [tool.lsdae] fail-on must be one of {', '.join(FAIL_ON)}")
+    if "exit-zero" in values and not isinstance(values["exit-zero"], bool):
+        raise ConfigError(f"{path}: [tool.lsdae] exit-zero must be true or false")
+    jobs = values.get("jobs", 1)
+    if isinstance(jobs, bool) or not isinstance(jobs, int) or jobs < 1:
+        raise ConfigError(f"{path}: [tool.lsdae] jobs must be a positive integer")
+    if "baseline" in values:
+        if not isinstance(values["baseline"], str) or not values["baseline"]:
+            raise ConfigError(f"{path}: [tool.lsdae] baseline must be a file name")
+        values["baseline"] = str(path.parent / values["baseline"])

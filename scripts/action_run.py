@@ -1,0 +1,150 @@
+"""The script behind action.yml: install lsdae, check the FMUs, hand the results to GitHub.
+
+Inputs come from environment variables that action.yml sets from the action's inputs:
+
+    LSDAE_FMUS         glob patterns, separated by whitespace or newlines (** recurses)
+    LSDAE_SELECT       rules to select (comma-separated), optional
+    LSDAE_IGNORE       rules to ignore (comma-separated), optional
+    LSDAE_FAIL_ON      error | warning | never
+    LSDAE_PROBES       true | false
+    LSDAE_JUNIT        path of a JUnit XML report to write, optional
+    LSDAE_SARIF        path of a SARIF report to write, optional
+    LSDAE_BASELINE     a baseline file (lsdae check --baseline), optional
+    LSDAE_REPORT_DIR   where lsdae.json, lsdae.md and lsdae.html go (default lsdae-report)
+    LSDAE_ACTION_PATH  the action's checkout, installed with pip
+    LSDAE_ACTION_SKIP_INSTALL=1   use the lsdae importable by this Python instead (tests)
+
+It installs the checker into its own virtual environment under $RUNNER_TEMP (never into the
+runner's Python), runs ``lsdae check`` once with every output, streams the ``github`` format to
+stdout (the runner turns those lines into annotations), appends the Markdown summary to
+$GITHUB_STEP_SUMMARY, writes the counts to $GITHUB_OUTPUT, and exits with lsdae's exit code,
+which follows ``fail-on``. Standard library only: it runs before lsdae is installed.
+"""
+from __future__ import annotations
+
+import glob
+import json
+import os
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+FAIL_ON = ("error", "warning", "never")
+EXIT_USAGE = 2
+
+
+def _env(name: str, default: str = "") -> str:
+    return os.environ.get(name, default).strip()
+
+
+def expand(patterns: str) -> list[str]:
+    """FMU paths matching the whitespace-separated glob patterns, each once, sorted per pattern."""
+    found: dict[str, None] = {}
+    for pattern in patterns.split():
+        matches = sorted(glob.glob(pattern, recursive=True))
+        if not matches and Path(pattern).exists():
+            matches = [pattern]
+        for m in matches:
+            found.setdefault(m, None)
+    return list(found)
+
+
+def _lsdae_command() -> list[str]:
+    if _env("LSDAE_ACTION_SKIP_INSTALL") in ("1", "true"):
+        return [sys.executable, "-m", "conformance"]
+    action = _env("LSDAE_ACTION_PATH") or str(Path(__file__).resolve().parent.parent)
+    venv = Path(_env("RUNNER_TEMP") or tempfile.gettempdir()) / "lsdae-venv"
+    bindir = venv / ("Scripts" if os.name == "nt" else "bin")
+    python = bindir / ("python.exe" if os.name == "nt" else "python")
+    if not python.exists():
+        subprocess.run([sys.executable, "-m", "venv", str(venv)], check=True)
+    print("::group::Install lsdae", flush=True)
+    subprocess.run([str(python), "-m", "pip", "install", "--quiet", "--disable-pip-version-check",
+                    action], check=True)
+    print("::endgroup::", flush=True)
+    return [str(python), "-m", "conformance"]
+
+
+def _arguments(fmus: list[str], report_dir: Path, fail_on: str) -> list[str]:
+    args = ["check", *fmus, "--fail-on", fail_on, "--progress", "never", "--color", "never",
+            "--format", "github",
+            "--format", f"json:{report_dir / 'lsdae.json'}",
+            "--format", f"markdown:{report_dir / 'lsdae.md'}",
+            "--format", f"html:{report_dir / 'lsdae.html'}"]
+    for env, fmt in (("LSDAE_JUNIT", "junit"), ("LSDAE_SARIF", "sarif")):
+        if _env(env):
+            args += ["--format", f"{fmt}:{_env(env)}"]
+    for env, flag in (("LSDAE_SELECT", "--select"), ("LSDAE_IGNORE", "--ignore"),
+                      ("LSDAE_BASELINE", "--baseline")):
+        if _env(env):
+            args += [flag, _env(env)]
+    if _env("LSDAE_PROBES", "true").lower() == "false":
+        args.append("--no-probes")
+    return args
+
+
+def counts(report: dict) -> dict[str, int]:
+    """Findings by severity, leaving out those a baseline accepted."""
+    out = {"errors": 0, "warnings": 0, "infos": 0, "baselined": 0,
+           "fmus": len(report.get("fmus", ()))}
+    key = {"error": "errors", "warning": "warnings", "info": "infos"}
+    for fmu in report.get("fmus", ()):
+        for f in fmu.get("findings", ()):
+            if (f.get("evidence") or {}).get("baselined"):
+                out["baselined"] += 1
+            else:
+                out[key[f["severity"]]] += 1
+    return out
+
+
+def _append(env: str, text: str) -> None:
+    target = _env(env)
+    if not target:
+        return
+    with open(target, "a", encoding="utf-8") as handle:
+        handle.write(text)
+
+
+def _outputs(values: dict[str, object]) -> None:
+    _append("GITHUB_OUTPUT", "".join(f"{k}={v}\n" for k, v in values.items()))
+
+
+def main() -> int:
+    fail_on = _env("LSDAE_FAIL_ON", "error").lower() or "error"
+    if fail_on not in FAIL_ON:
+        print(f"::error title=lsdae::fail-on must be one of {', '.join(FAIL_ON)}, "
+              f"not {fail_on!r}")
+        return EXIT_USAGE
+    if _env("LSDAE_PROBES", "true").lower() not in ("true", "false"):
+        print("::error title=lsdae::probes must be true or false")
+        return EXIT_USAGE
+    fmus = expand(_env("LSDAE_FMUS", "**/*.fmu"))
+    report_dir = Path(_env("LSDAE_REPORT_DIR") or "lsdae-report")
+    report_dir.mkdir(parents=True, exist_ok=True)
+    if not fmus:
+        print(f"::error title=lsdae::no FMU matches {_env('LSDAE_FMUS', '**/*.fmu')!r}")
+        _outputs({"errors": 0, "warnings": 0, "infos": 0, "baselined": 0, "fmus": 0,
+                  "report-dir": report_dir})
+        _append("GITHUB_STEP_SUMMARY", "**lsdae**: no FMU matched the `fmus` pattern.\n")
+        return EXIT_USAGE
+    command = _lsdae_command() + _arguments(fmus, report_dir, fail_on)
+    print(f"lsdae: checking {len(fmus)} FMU{'s' if len(fmus) != 1 else ''}", flush=True)
+    code = subprocess.run(command).returncode
+    json_path, md_path = report_dir / "lsdae.json", report_dir / "lsdae.md"
+    try:
+        report = json.loads(json_path.read_text(encoding="utf-8"))
+    except (OSError, ValueError) as exc:
+        print(f"::error title=lsdae::no report was written ({exc}); exit code {code}")
+        return code or EXIT_USAGE
+    values: dict[str, object] = dict(counts(report))
+    values.update({"report-dir": report_dir, "json": json_path, "markdown": md_path,
+                   "html": report_dir / "lsdae.html"})
+    _outputs(values)
+    if md_path.is_file():
+        _append("GITHUB_STEP_SUMMARY", md_path.read_text(encoding="utf-8") + "\n")
+    return code
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,206 @@
+"""The HTML reporter: self-contained, deterministic, plots from probe info, opened in Chromium."""
+from __future__ import annotations
+
+import base64
+import os
+import re
+import shutil
+import subprocess
+from html.parser import HTMLParser
+from pathlib import Path
+
+import pytest
+
+from conformance.catalogue import default_catalogue
+from conformance.findings import Finding, FmuReport, Location, Report, RunInfo, Severity, evidence
+from conformance.reporters import REPORTER_BY_NAME
+from conformance.reporters.html import render
+
+CATALOGUE = default_catalogue()
+
+
+def _finding(code: str, severity: Severity, message: str, **kw) -> Finding:
+    return Finding(code, CATALOGUE[code].name, severity, message, **kw)
+
+
+def sample_report(*, baselined: bool = True) -> Report:
+    """Two FMUs: one with findings and probe data, one clean without probes."""
+    rows = ["der(x1)", "der(x2)", "r1", "r2"]
+    cols = ["x1", "x2", "w1", "w2", "u"]
+    declared = [[0, 1], [1, 0], [1, 2], [2, 0], [2, 2], [3, 1], [3, 3], [3, 4]]
+    observed = [[0, 1], [1, 0], [1, 2], [2, 0], [2, 2], [2, 3], [3, 1], [3, 3]]
+    errors = [
+        {"rule": "DAE701", "entry": "r1 at start", "error": 3e-13, "tolerance": 1e-8},
+        {"rule": "DAE702", "entry": "d(r1)/d(w2)", "error": 0.5, "tolerance": 1e-6},
+        {"rule": "DAE702", "entry": "d(der(x2))/d(w1)", "error": 2e-9, "tolerance": 1e-6},
+        {"rule": "DAE703", "entry": "der(x1) ODE vs DAE", "error": 0.0, "tolerance": 1e-8},
+        {"rule": "DAE703", "entry": "der(x2) ODE vs DAE", "error": float("nan"),
+         "tolerance": 1e-8},
+    ]
+    mark = evidence(baselined=True) if baselined else ()
+    findings = (
+        _finding("DAE203", Severity.ERROR, "enable parameter 'dae' is a <Float64>, not a "
+                 "<Boolean> <script>alert(1)</script>",
+                 location=Location("modelDescription.xml", 12, None,
+                                   "/fmiModelDescription/ModelVariables/Float64[@name='dae']",
+                                   '<Float64 name="dae" valueReference="1" '
+                                   'causality="structuralParameter"/>'),
+                 evidence=evidence(value_reference=1, type="Float64"), subject="dae"),
+        _finding("DAE104", Severity.WARNING, "the manifest's 'fmi-ls-description' differs",
+                 location=Location("extra/org.fmi-standard.fmi-ls-dae/fmi-ls-manifest.xml", 2,
+                                   snippet="<fmiDAEManifest"), evidence=mark),
+        _finding("DAE091", Severity.INFO, "no manifest: an ordinary Model Exchange FMU"),
+    )
+    first = FmuReport("build/demo/Broken.fmu", "alpha1", findings, rules_run=("DAE203",),
+                      info=evidence(model_name="Broken", fmi_version="3.0", variables=9,
+                                    jacobian={"rows": rows, "cols": cols, "declared": declared,
+                                              "observed": observed},
+                                    probe_errors=errors, seed=0))
+    second = FmuReport("build/demo/Clean.fmu", "alpha1", (),
+                       rules_skipped=(("DAE701", "probes turned off (--no-probes)"),),
+                       info=evidence(model_name="Clean"))
+    return Report("0.1.0", (first, second), options=evidence(draft="auto", probes=True,
+                                                             seed=0))
+
+
+class _Collect(HTMLParser):
+    VOID = {"meta", "img", "br", "hr", "link", "input"}
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.stack: list[str] = []
+        self.tags: list[tuple[str, dict]] = []
+        self.errors: list[str] = []
+
+    def handle_starttag(self, tag, attrs):
+        self.tags.append((tag, dict(attrs)))
+        if tag not in self.VOID:
+            self.stack.append(tag)
+
+    def handle_endtag(self, tag):
+        if not self.stack or self.stack[-1] != tag:
+            self.errors.append(f"</{tag}> closes {self.stack[-1:] or 'nothing'}")
+        else:
+            self.stack.pop()
+
+
+def _parse(page: str) -> _Collect:
+    parser = _Collect()
+    parser.feed(page)
+    parser.close()
+    assert parser.errors == [] and parser.stack == [], (parser.errors, parser.stack)
+    return parser
+
+
+def test_registered():
+    assert REPORTER_BY_NAME["html"] is render
+
+
+def test_page_is_self_contained_and_well_nested():
+    page = render(sample_report(), CATALOGUE)
+    parsed = _parse(page)
+    assert not any(tag == "script" for tag, _ in parsed.tags)
+    assert "Content-Security-Policy" in page
+    for tag, attrs in parsed.tags:
+        for name in ("src", "href"):
+            value = attrs.get(name)
+            if value is not None:
+                assert value.startswith(("data:", "#")), (tag, value[:80])
+    assert "<script>alert(1)</script>" not in page  # messages are escaped
+
+
+def test_plots_are_decodable_images():
+    parsed = _parse(render(sample_report(), CATALOGUE))
+    images = [attrs["src"] for tag, attrs in parsed.tags if tag == "img"]
+    assert len(images) == 2  # the sparsity and the error plot of the first FMU
+    for uri in images:
+        mime, _, payload = uri.partition(";base64,")
+        data = base64.b64decode(payload)
+        assert mime == "data:image/svg+xml" and data.lstrip().startswith(b"<?xml")
+        # namespace names are not fetched; a reference to another resource would be
+        assert not re.search(rb'(href|src)="(?!#)', data), "the plot refers outside itself"
+
+
+def test_deterministic_apart_from_run_info():
+    report = sample_report()
+    assert render(report, CATALOGUE) == render(report, CATALOGUE)
+    a = render(report, CATALOGUE, run=RunInfo("2026-01-01T00:00:00+00:00", "a",
+                                              (("build/demo/Broken.fmu", 1.0),)))
+    b = render(report, CATALOGUE, run=RunInfo("2026-02-02T00:00:00+00:00", "b",
+                                              (("build/demo/Broken.fmu", 2.0),)))
+    assert len(a.splitlines()) == len(b.splitlines())
+    differ = [(x, y) for x, y in zip(a.splitlines(), b.splitlines(), strict=True) if x != y]
+    assert all("2026-0" in x or "1.00" in x for x, _ in differ), differ
+
+
+def test_verdict_counts_and_baseline_marks():
+    page = render(sample_report(), CATALOGUE)
+    assert "Not conformant: 1 error, 0 warnings (1 more accepted by the baseline)" in page
+    assert page.count('class="badge baselined"') == 1
+    clean = Report("0.1.0", (sample_report().fmus[1],))
+    assert "Conformant: no errors or warnings" in render(clean, CATALOGUE)
+
+
+def test_no_probe_data_is_said_not_drawn():
+    page = render(Report("0.1.0", (sample_report().fmus[1],)), CATALOGUE)
+    assert "<img" not in page
+    assert "No probe data: probes turned off (--no-probes)." in page
+
+
+def test_large_jacobian_is_a_png():
+    n = 80
+    jac = {"rows": [f"r{i}" for i in range(n)], "cols": [f"c{i}" for i in range(n)],
+           "declared": [[i, j] for i in range(n) for j in range(n) if (i + j) % 2 == 0],
+           "observed": [[i, j] for i in range(n) for j in range(n) if (i + j) % 2 == 0]}
+    fmu = FmuReport("big.fmu", "alpha1", (), info=evidence(jacobian=jac))
+    page = render(Report("0.1.0", (fmu,)), CATALOGUE)
+    assert "data:image/png;base64," in page
+    assert render(Report("0.1.0", (fmu,)), CATALOGUE) == page
+
+
+def test_malformed_probe_data_does_not_break_the_page():
+    fmu = FmuReport("odd.fmu", "alpha1", (), info=evidence(
+        jacobian={"rows": ["a"], "cols": ["b"], "declared": [[5, 5]], "observed": []},
+        probe_errors=[{"rule": "DAE701", "entry": "x", "error": "oops", "tolerance": 1}]))
+    page = render(Report("0.1.0", (fmu,)), CATALOGUE)
+    assert page.count("could not be plotted") == 2
+    _parse(page)
+
+
+def _chromium() -> str | None:
+    return shutil.which("chromium") or shutil.which("chromium-browser") \
+        or shutil.which("google-chrome")
+
+
+@pytest.mark.skipif(_chromium() is None, reason="chromium is not installed")
+def test_opens_in_headless_chromium_without_console_messages(tmp_path):
+    page = tmp_path / "report.html"
+    page.write_text(render(sample_report(), CATALOGUE, run=RunInfo(
+        "2026-01-01T00:00:00+00:00", "ci", (("build/demo/Broken.fmu", 0.42),))), "utf-8")
+    shot = Path(os.environ.get("LSDAE_HTML_SCREENSHOT", tmp_path / "report.png"))
+    log = _headless(page, shot, tmp_path)
+    console = [line for line in log.splitlines() if ":CONSOLE" in line]
+    assert console == [], console
+    assert shot.is_file() and shot.stat().st_size > 10_000
+    assert shot.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+@pytest.mark.skipif(_chromium() is None, reason="chromium is not installed")
+def test_chromium_check_would_see_a_network_fetch(tmp_path):
+    """The console check is not vacuous: the page's CSP turns a remote image into a message."""
+    page = tmp_path / "bad.html"
+    good = render(Report("0.1.0", (sample_report().fmus[1],)), CATALOGUE)
+    page.write_text(good.replace("</main>", '<img src="https://example.invalid/x.png"></main>'),
+                    "utf-8")
+    log = _headless(page, tmp_path / "bad.png", tmp_path)
+    assert re.search(r":CONSOLE.*Content Security Policy", log), log[-2000:]
+
+
+def _headless(page: Path, shot: Path, tmp_path: Path) -> str:
+    cmd = [_chromium(), "--headless=new", "--no-sandbox", "--disable-gpu",
+           "--no-first-run", "--no-default-browser-check", "--disable-extensions",
+           f"--user-data-dir={tmp_path / 'profile'}", "--enable-logging=stderr", "--v=0",
+           "--hide-scrollbars", "--window-size=1280,2400", f"--screenshot={shot}",
+           page.as_uri()]
+    done = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
+    return done.stdout + done.stderr

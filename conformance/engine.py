@@ -223,7 +223,17 @@ def _run(path: Path, options: EngineOptions, catalogue: Catalogue, selection: Ru
 def _run_probe_stage(source, ctx: CheckContext, options: EngineOptions, catalogue: Catalogue,
                      selection: RuleSelection, collector: _Collector, state: _State) -> None:
     """Dynamic probes: load the binary in a worker process (conformance.probes)."""
-    rules = [r for r in catalogue if r.stage == "probe" and r.code in selection.enabled]
+    have = {"model-description": ctx.model is not None, "manifest": ctx.manifest is not None,
+            "binary": True}  # whether there is a binary for this platform, the runner decides
+    rules = []
+    for rule in catalogue:
+        if rule.stage != "probe" or rule.code not in selection.enabled:
+            continue
+        missing = [n for n in rule.needs if not have.get(n, False)]
+        if missing:
+            state.skipped.add((rule.code, f"no {missing[0]}"))
+        else:
+            rules.append(rule)
     if not rules:
         return
     if not options.probes:

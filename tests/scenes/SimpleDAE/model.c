@@ -34,7 +34,11 @@ static void partials(double t, const double x[], const double w[], const double 
     const double c1 = cos(z1 * z2 * u1), c2 = cos(z1 * z2 * u2), c12 = cos(x1 * x2);
     const double e = exp(z1 * z2 * u1) / 3, th = tanh(3 * z1), cz = cos(z2 * x2);
     (void)t;
+#ifdef DEFECT_WRONG_JACOBIAN
+    D_DER_X(0, 0) = -cos(x1);       /* sign error: d der(x1)/d x1 is cos(x1) */
+#else
     D_DER_X(0, 0) = cos(x1);
+#endif
     D_DER_W(0, 0) = c1 * z2 * u1;
     D_DER_W(0, 1) = c1 * z1 * u1;
     D_DER_U(0, 0) = c1 * z1 * z2;

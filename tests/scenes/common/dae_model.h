@@ -22,8 +22,11 @@
 
 #include "fmi3Functions.h"
 
-/* Upper bound for each of nx, nw, nu, ny. */
+/* Upper bound for each of nx, nw, nu, ny; a scalable scene (Chain) raises it with
+ * -DFMU_MAX_VARS=... (the framework's dense work arrays grow with its square). */
+#ifndef FMU_MAX_VARS
 #define FMU_MAX_VARS 8
+#endif
 
 typedef void (*ModelEvalFn)(double t, const double x[], const double w[],
                             const double u[], double der[], double res[],

@@ -38,6 +38,12 @@ class FmiError(Exception):
         self.call, self.status, self.log = call, status, tuple(log)
 
 
+class ProbeSkipped(Exception):
+    """Raised by a probe that cannot run on this FMU (e.g. DAE mode could not be started);
+    the message is the reason, reported in ``rules_skipped``. An :class:`FmiError` escaping a
+    probe is reported the same way (the probe could not complete, it found nothing)."""
+
+
 @dataclass(frozen=True)
 class Point:
     """A sampling point: time and the values of states, algebraic variables and inputs by vr."""

@@ -8,6 +8,28 @@
  */
 #include "dae_model.h"
 
+#ifdef DEFECT_HIDDEN_STATE
+/* Defect: the residual depends on the history of calls. Every jump to a distant point (more
+ * than 0.01 in nominal-scaled distance) shifts it by 1e-9, like a warm-started inner solve
+ * that stops early. Small (finite-difference) steps do not move it, so it shows only when the
+ * same point is evaluated again after another one. */
+static double hidden_offset(double t, const double x[]) {
+    static double last[3];
+    static int have_last = 0;
+    static long jumps = 0;
+    const double now[3] = {t, x[0], x[1] / 1e-5};
+    double d2 = 0.0;
+    int i;
+    for (i = 0; i < 3; i++) {
+        d2 += (now[i] - last[i]) * (now[i] - last[i]);
+        last[i] = now[i];
+    }
+    if (have_last && d2 > 1e-4) jumps++;
+    have_last = 1;
+    return 1e-9 * (double)jumps;
+}
+#endif
+
 #define NX 2
 #define NW 1
 #define NU 0
@@ -20,6 +42,9 @@ static void eval(double t, const double x[], const double w[], const double u[],
     der[0] = -0.04 * y1 + 1e4 * y2 * y3;
     der[1] = 0.04 * y1 - 1e4 * y2 * y3 - 3e7 * y2 * y2;
     res[0] = y1 + y2 + y3 - 1;
+#ifdef DEFECT_HIDDEN_STATE
+    res[0] += hidden_offset(t, x);
+#endif
 }
 
 static void partials(double t, const double x[], const double w[], const double u[],

@@ -13,6 +13,24 @@
  * Initialization Mode solves g = 0 in both modes (w are initial unknowns).
  *
  * Illegal calls return fmi3Error and leave the instance unchanged.
+ *
+ * Defect variants for the probe tests (tests/probes/defects_basic.py), each
+ * compiled in only with its -DDEFECT_... macro:
+ *   DEFECT_SEGFAULT_GETFLOAT64     fmi3GetFloat64 of a residual crashes (Continuous-Time Mode)
+ *   DEFECT_HANG_DIRECTIONAL        fmi3GetDirectionalDerivative never returns
+ *   DEFECT_MEMORY_BLOWUP           fmi3GetContinuousStateDerivatives allocates until it aborts
+ *   DEFECT_EXIT_IN_CALL            fmi3SetTime calls exit() once time has advanced
+ *   DEFECT_INCONSISTENT_INIT       DAE mode: w is reset to its guess when initialisation ends
+ *   DEFECT_NO_RECONFIGURATION      Reconfiguration Mode refused although the switch is tunable
+ *   DEFECT_ODE_DERIVATIVES_FAIL    ODE mode: fmi3GetContinuousStateDerivatives returns fmi3Error
+ *   DEFECT_DAE_INIT_REFUSED        DAE mode: fmi3ExitInitializationMode returns fmi3Error
+ *   DEFECT_W_NOT_SETTABLE          DAE mode: w cannot be set in Continuous-Time Mode
+ *   DEFECT_EVAL_ERROR_AFTER_START  DAE mode: reading residuals fails once time has advanced
+ *   DEFECT_MISSING_EXPORT          fmi3GetClock is not exported
+ *   DEFECT_DAE_ONLY                always in DAE mode, as if the switch were stuck at true
+ *   DEFECT_FATAL_DIRECTIONAL       fmi3GetDirectionalDerivative returns fmi3Fatal
+ *   DEFECT_WRONG_ADJOINT           the adjoint alone doubles d(res[0])/d(w[0]) (DAE mode)
+ *   DEFECT_ODE_DAE_INCONSISTENT    ODE mode solves g = 0.05 instead of g = 0
  */
 #include <math.h>
 #include <stdarg.h>
@@ -139,7 +157,11 @@ static double *slot(Data *d, int kind, int i) {
 static void reset_data(Data *d) {
     memset(d, 0, sizeof *d);
     d->state = Instantiated;
+#ifdef DEFECT_DAE_ONLY
+    d->dae = fmi3True;   /* a "DAE-only" FMU of the first exporter releases */
+#else
     d->dae = fmi3False;
+#endif
     memcpy(d->x, MODEL.x_start, sizeof d->x);
     memcpy(d->w, MODEL.w_start, sizeof d->w);
     memcpy(d->u, MODEL.u_start, sizeof d->u);
@@ -154,6 +176,18 @@ static int fmu_computes_w(const Data *d) {
 
 static void eval_at(const Data *d, const double w[], double der[], double res[], double y[]) {
     MODEL.eval(d->t, d->x, w, d->u, der, res, y);
+}
+
+/* The residuals the Newton iteration drives to zero (ODE mode and initialisation). */
+static void eval_solved(const Data *d, const double w[], double der[], double res[],
+                        double y[]) {
+    eval_at(d, w, der, res, y);
+#ifdef DEFECT_ODE_DAE_INCONSISTENT
+    if (!d->dae) {   /* ODE mode solves g = 0.05: its w differ from DAE mode's */
+        int i;
+        for (i = 0; i < NW; i++) res[i] -= 0.05;
+    }
+#endif
 }
 
 static void partials_at(const Data *d, const double w[], double J[]) {
@@ -219,7 +253,7 @@ static int solve_algebraic(Instance *c) {
     double der[NMAX], res[NMAX], y[NMAX], rt[NMAX], wt[NMAX], dw[NMAX];
     int piv[NMAX], i, it, k;
 
-    eval_at(d, d->w, der, res, y);
+    eval_solved(d, d->w, der, res, y);
     for (it = 0; it < 100; it++) {
         double r0 = norm2(NW, res), lam = 1.0, step = 0.0;
         if (r0 == 0.0) break;
@@ -233,7 +267,7 @@ static int solve_algebraic(Instance *c) {
         for (k = 0; k <= 30; k++, lam *= 0.5) {  /* backtracking on |g| */
             if (k == 30) lam = 1.0;                /* no decrease: take the full step */
             for (i = 0; i < NW; i++) wt[i] = d->w[i] + lam * dw[i];
-            eval_at(d, wt, der, rt, y);
+            eval_solved(d, wt, der, rt, y);
             if (k == 30 || norm2(NW, rt) <= (1.0 - 1e-4 * lam) * r0) break;
         }
         for (i = 0; i < NW; i++) {
@@ -335,6 +369,9 @@ static fmi3Status partial_derivatives(fmi3Instance instance, const char *fn, int
         int r = unknown_row(&c->d, unknowns[i]);
         for (j = 0; j < nK; j++) {
             double e = E[r * NCOLS + known_col(&c->d, knowns[j])];
+#ifdef DEFECT_WRONG_ADJOINT
+            if (adjoint && r == NX && known_col(&c->d, knowns[j]) == NX) e *= 2.0;
+#endif
             if (adjoint) sens[j] += e * seed[i];
             else         sens[i] += e * seed[j];
         }
@@ -346,6 +383,16 @@ fmi3Status fmi3GetDirectionalDerivative(fmi3Instance instance,
         const fmi3ValueReference unknowns[], size_t nUnknowns,
         const fmi3ValueReference knowns[], size_t nKnowns,
         const fmi3Float64 seed[], size_t nSeed, fmi3Float64 sensitivity[], size_t nSensitivity) {
+#ifdef DEFECT_HANG_DIRECTIONAL
+    { volatile int spin = 1; while (spin) { } }   /* an iteration without a limit */
+#endif
+#ifdef DEFECT_FATAL_DIRECTIONAL
+    {
+        Instance *c = (Instance *)instance;
+        logmsg(c, fmi3Fatal, "fmi3GetDirectionalDerivative: internal state corrupted");
+        return fmi3Fatal;
+    }
+#endif
     return partial_derivatives(instance, "fmi3GetDirectionalDerivative", 0, unknowns, nUnknowns,
                                knowns, nKnowns, seed, nSeed, sensitivity, nSensitivity);
 }
@@ -443,7 +490,16 @@ fmi3Status fmi3EnterInitializationMode(fmi3Instance instance, fmi3Boolean tolera
 
 fmi3Status fmi3ExitInitializationMode(fmi3Instance instance) {
     BEGIN("fmi3ExitInitializationMode", InitializationMode);
+#ifdef DEFECT_DAE_INIT_REFUSED
+    if (c->d.dae) FAIL("fmi3ExitInitializationMode: initialisation in DAE mode is not supported");
+#endif
     if (update(c) != fmi3OK) return fmi3Error;   /* w consistent in both modes */
+#ifdef DEFECT_INCONSISTENT_INIT
+    if (c->d.dae) {   /* forgets the solved w: the initial point is not consistent */
+        memcpy(c->d.w, MODEL.w_start, sizeof c->d.w);
+        c->d.eval_valid = 0;
+    }
+#endif
     c->d.state = EventMode;
     return fmi3OK;
 }
@@ -472,6 +528,9 @@ fmi3Status fmi3EnterConfigurationMode(fmi3Instance instance) {
         c->d.state = ConfigurationMode;
         return fmi3OK;
     }
+#ifdef DEFECT_NO_RECONFIGURATION
+    FAIL("fmi3EnterConfigurationMode: Reconfiguration Mode is not implemented");
+#endif
     if (!MODEL.enable_tunable)
         FAIL("fmi3EnterConfigurationMode: no tunable structural parameter");
     if (update(c) != fmi3OK) return fmi3Error;   /* switch from a consistent w */
@@ -500,6 +559,16 @@ fmi3Status fmi3GetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], 
         int kind = lookup(vr[k], &idx);
         if (!slot(&c->d, kind, idx)) FAIL("fmi3GetFloat64: no Float64 variable %u", (unsigned)vr[k]);
         computed |= kind == K_DER || kind == K_RES || kind == K_Y || kind == K_W;
+#ifdef DEFECT_SEGFAULT_GETFLOAT64
+        if (kind == K_RES && c->d.state == ContinuousTimeMode) {
+            double *volatile missing = NULL;   /* a buffer that was never allocated */
+            values[k] = *missing;
+        }
+#endif
+#ifdef DEFECT_EVAL_ERROR_AFTER_START
+        if (kind == K_RES && c->d.dae && c->d.state == ContinuousTimeMode && c->d.t > 0)
+            FAIL("fmi3GetFloat64: residual evaluation failed at t=%g", c->d.t);
+#endif
     }
     if (computed && update(c) != fmi3OK) return fmi3Error;
     for (k = 0; k < nvr; k++) {
@@ -514,7 +583,12 @@ static int may_set(const Data *d, int kind) {
     switch (kind) {
     case K_X:
     case K_U: return (d->state & (Instantiated | running)) != 0;
+#ifdef DEFECT_W_NOT_SETTABLE
+    case K_W: return d->state == Instantiated ||
+                     (d->dae && (d->state & (InitializationMode | EventMode)));
+#else
     case K_W: return d->state == Instantiated || (d->dae && (d->state & running));
+#endif
     default:  return 0;
     }
 }
@@ -610,11 +684,13 @@ fmi3Status fmi3SetBinary(fmi3Instance instance, const fmi3ValueReference vr[], s
     return no_variables(instance, "fmi3SetBinary", nvr);
 }
 
+#ifndef DEFECT_MISSING_EXPORT
 fmi3Status fmi3GetClock(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
                         fmi3Clock values[]) {
     (void)vr; (void)values;
     return no_variables(instance, "fmi3GetClock", nvr);
 }
+#endif
 
 fmi3Status fmi3SetClock(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
                         const fmi3Clock values[]) {
@@ -656,6 +732,9 @@ fmi3Status fmi3CompletedIntegratorStep(fmi3Instance instance,
 
 fmi3Status fmi3SetTime(fmi3Instance instance, fmi3Float64 time) {
     BEGIN("fmi3SetTime", ContinuousTimeMode);
+#ifdef DEFECT_EXIT_IN_CALL
+    if (time > 0) exit(3);   /* "cannot continue": ends the importer's process */
+#endif
     if (!isfinite(time)) FAIL("fmi3SetTime: time is not finite");
     c->d.t = time;
     changed(&c->d);
@@ -673,6 +752,16 @@ fmi3Status fmi3SetContinuousStates(fmi3Instance instance, const fmi3Float64 x[],
 fmi3Status fmi3GetContinuousStateDerivatives(fmi3Instance instance, fmi3Float64 der[], size_t nx) {
     BEGIN("fmi3GetContinuousStateDerivatives", RUNNING);
     if (nx != (size_t)NX || (nx && !der)) FAIL("fmi3GetContinuousStateDerivatives: expected %d", NX);
+#ifdef DEFECT_MEMORY_BLOWUP
+    for (;;) {   /* a runaway cache: grows until malloc fails, then aborts */
+        char *block = (char *)malloc((size_t)64 << 20);
+        if (!block) abort();
+        memset(block, 1, (size_t)64 << 20);
+    }
+#endif
+#ifdef DEFECT_ODE_DERIVATIVES_FAIL
+    if (!c->d.dae) FAIL("fmi3GetContinuousStateDerivatives: not available in ODE mode");
+#endif
     if (update(c) != fmi3OK) return fmi3Error;
     memcpy(der, c->d.der, nx * sizeof(double));
     return fmi3OK;

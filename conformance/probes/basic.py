@@ -1,0 +1,551 @@
+"""The basic probes: the enable handshake, setting algebraic variables, consistency at the start,
+repeatability, non-finite values and failing evaluations.
+
+Each probe runs in the worker process on a :class:`~conformance.probes.api.ProbeContext` whose
+``facts`` hold the :class:`~conformance.probes.sampling.Layout` (``"layout"``) and the loaded
+:class:`~conformance.probes.session.Library` (``"library"``), and yields violations. Tolerances
+are catalogue options. One fault, one finding: a probe that cannot set a point or start DAE mode
+raises :class:`ProbeSkipped` (or lets the :class:`FmiError` escape), and the rule that owns the
+fault reports it; non-finite values are left to ``nan-or-inf``.
+"""
+from __future__ import annotations
+
+import contextlib
+import math
+from typing import Any, Iterator, Sequence
+
+import numpy as np
+
+from ..findings import Location, Violation, evidence
+from ..model import MODEL_DESCRIPTION
+from .api import FmiError, Point, ProbeContext, ProbeSkipped
+from .sampling import Layout, _within
+from .session import INIT_CALLS, Instance, Library, PointNotSet, configure, reconfigure
+
+# --------------------------------------------------------------------------------- helpers
+
+
+def _layout(ctx: ProbeContext) -> Layout:
+    return ctx.facts["layout"]  # type: ignore[return-value]
+
+
+def _dae(ctx: ProbeContext) -> Instance:
+    """The DAE-mode evaluator, or ProbeSkipped saying why there is none."""
+    if ctx.dae is None:
+        error = ctx.facts.get("dae_error")
+        raise ProbeSkipped(f"DAE mode could not be started: {error}" if error else
+                           "DAE mode could not be started")
+    return ctx.dae  # type: ignore[return-value]
+
+
+def _var_location(ctx: ProbeContext, vr: int) -> Location:
+    var = ctx.model.by_vr.get(vr)
+    if var is None:
+        return Location(file=MODEL_DESCRIPTION)
+    return Location(file=ctx.model.file, line=var.line, path=var.path)
+
+
+def _manifest_location(ctx: ProbeContext, vr: int | None, kinds: Sequence[str]) -> Location:
+    """The manifest element of kind ``kinds`` (AlgebraicVariable, Residual, ...) for ``vr``."""
+    m = ctx.manifest
+    if m is None:
+        return Location()
+    if "AlgebraicVariable" in kinds:
+        for ref in m.algebraic:
+            if ref.vr == vr:
+                return Location(file=m.file, line=ref.line, path=ref.path)
+    if "Enable" in kinds and m.enables:
+        ref = m.enables[0]
+        return Location(file=m.file, line=ref.line, path=ref.path)
+    for u in m.structure:
+        if u.kind in kinds and u.vr == vr:
+            return Location(file=m.file, line=u.line, path=u.path)
+    return _var_location(ctx, vr) if vr is not None else Location(file=m.file, line=m.root_line)
+
+
+def _root_location(ctx: ProbeContext) -> Location:
+    m = ctx.manifest
+    return Location(file=m.file, line=m.root_line) if m else Location(file=MODEL_DESCRIPTION)
+
+
+def _unknown_location(ctx: ProbeContext, vr: int) -> Location:
+    loc = _manifest_location(ctx, vr, ("Residual", "ContinuousStateDerivative", "Output"))
+    return loc if loc.line is not None else _var_location(ctx, vr)
+
+
+def _unknowns(layout: Layout, mode: str = "dae") -> list[int]:
+    """Residuals (DAE mode), derivatives and outputs, each once."""
+    vrs = [*(layout.residuals if mode == "dae" else ()), *layout.derivatives_for(mode),
+           *layout.outputs_for(mode)]
+    return list(dict.fromkeys(vrs))
+
+
+def _error_evidence(exc: FmiError) -> dict[str, Any]:
+    return {"call": exc.call, "status": exc.status, "log": list(exc.log[:10])}
+
+
+def _close(a: float, b: float, *, rtol: float, atol: float, scale: float) -> bool:
+    return abs(a - b) <= atol + rtol * max(scale, abs(a), abs(b))
+
+
+def _finite(values: Any) -> bool:
+    return bool(np.all(np.isfinite(values)))
+
+
+def _new_instance(library: Library, label: str) -> Instance:
+    return Instance(library, name=library.next_name(label))
+
+
+@contextlib.contextmanager
+def _fresh(ctx: ProbeContext, mode: str) -> Iterator[Instance]:
+    """A new instance in Continuous-Time Mode in ``mode``, freed afterwards."""
+    inst = ctx.new_instance(mode)
+    try:
+        yield inst  # type: ignore[misc]
+    finally:
+        inst.free()  # type: ignore[attr-defined]
+
+
+# -------------------------------------------------------------------------- enable-handshake
+
+
+class _Steps:
+    """Runs the calls of a handshake one by one and remembers how far it got."""
+
+    def __init__(self) -> None:
+        self.done: list[str] = []
+
+    def __call__(self, label: str, fn: Any, *args: Any) -> Any:
+        result = fn(*args)
+        self.done.append(label)
+        return result
+
+
+def enable_handshake(ctx: ProbeContext) -> Iterator[Violation]:
+    """DAE-12, DAE-13, DAE-11: switch DAE mode on in Configuration Mode (and, for a tunable
+    switch, off and on again in Reconfiguration Mode); with the switch false, run as an ODE FMU.
+
+    An fmi3Error from fmi3Enter/ExitInitializationMode in DAE mode is not reported here: alpha.1
+    allows it (DAE-14), and ``dae-initialization-refused`` reports it as information.
+    """
+    layout = _layout(ctx)
+    library: Library = ctx.facts["library"]  # type: ignore[assignment]
+    if layout.enable_status == "unusable":
+        raise ProbeSkipped("the enable parameter cannot be used (see the static findings)")
+    where = _manifest_location(ctx, layout.enable, ("Enable",))
+    subject = layout.name(layout.enable) if layout.enable is not None else None
+    yield from _dae_handshake(ctx, layout, library, where, subject)
+    if layout.enable is not None:
+        yield from _ode_handshake(ctx, layout, library, where, subject)
+
+
+def _dae_handshake(ctx: ProbeContext, layout: Layout, library: Library, where: Location,
+                   subject: str | None) -> Iterator[Violation]:
+    steps = _Steps()
+    vr = layout.enable
+    inst = None
+    try:
+        inst = steps("fmi3InstantiateModelExchange", _new_instance, library, "handshake-dae")
+        if vr is not None:
+            steps("fmi3EnterConfigurationMode", inst.enter_configuration_mode)
+            steps("fmi3SetBoolean(true)", inst.set_boolean, vr, True)
+            steps("fmi3ExitConfigurationMode", inst.exit_configuration_mode)
+        try:
+            steps("fmi3EnterInitializationMode", inst.enter_initialization_mode,
+                  layout.start_time)
+            if vr is not None and not steps("fmi3GetBoolean", inst.get_boolean, vr):
+                yield Violation(
+                    "the enable parameter {subject} reads back false in Initialization Mode "
+                    "after fmi3SetBoolean(true) in Configuration Mode", where,
+                    evidence(sequence=steps.done, expected=True, actual=False), subject)
+                return
+            steps("fmi3ExitInitializationMode", inst.exit_initialization_mode)
+        except FmiError as exc:
+            if exc.call in INIT_CALLS:
+                return  # DAE-14: allowed under alpha.1, reported by dae-initialization-refused
+            raise
+        steps("fmi3UpdateDiscreteStates", inst.update_discrete_states)
+        if vr is not None and layout.enable_tunable:
+            yield from _reconfigure(inst, vr, steps, where, subject)
+        steps("fmi3EnterContinuousTimeMode", inst.enter_continuous_time_mode)
+        steps("fmi3GetContinuousStateDerivatives", inst.get_derivatives,
+              len(layout.states))
+    except FmiError as exc:
+        yield Violation(
+            f"switching DAE mode on fails: {exc.call} returned {exc.status} after "
+            f"{' -> '.join(steps.done) or 'nothing'}", where,
+            evidence(_error_evidence(exc), sequence=steps.done, mode="dae"), subject)
+    finally:
+        if inst is not None:
+            inst.free()
+
+
+def _reconfigure(inst: Instance, vr: int, steps: _Steps, where: Location,
+                 subject: str | None) -> Iterator[Violation]:
+    """DAE-13: Event Mode -> Reconfiguration Mode, switch off and on again, read back."""
+    for value in (False, True):
+        steps(f"fmi3EnterConfigurationMode (Reconfiguration, set {str(value).lower()})",
+              reconfigure, inst, value)
+        if steps("fmi3GetBoolean", inst.get_boolean, vr) != value:
+            yield Violation(
+                "the tunable enable parameter {subject} does not read back "
+                f"{str(value).lower()} after it was set in Reconfiguration Mode", where,
+                evidence(sequence=steps.done, expected=value, actual=not value), subject)
+
+
+def _ode_handshake(ctx: ProbeContext, layout: Layout, library: Library, where: Location,
+                   subject: str | None) -> Iterator[Violation]:
+    """DAE-11: with the switch false (its start value), an ordinary Model Exchange FMU."""
+    steps = _Steps()
+    inst = None
+    point = None
+    try:
+        inst = steps("fmi3InstantiateModelExchange", _new_instance, library, "handshake-ode")
+        steps("fmi3EnterInitializationMode", inst.enter_initialization_mode, layout.start_time)
+        if steps("fmi3GetBoolean", inst.get_boolean, layout.enable):
+            yield Violation(
+                "the enable parameter {subject} reads true after instantiation: an FMU must "
+                "start in ODE mode", where, evidence(sequence=steps.done, expected=False,
+                                                     actual=True), subject)
+        steps("fmi3ExitInitializationMode", inst.exit_initialization_mode)
+        steps("fmi3UpdateDiscreteStates", inst.update_discrete_states)
+        steps("fmi3EnterContinuousTimeMode", inst.enter_continuous_time_mode)
+        for point in ctx.points:
+            inst.set_point(point)
+            steps(f"fmi3GetContinuousStateDerivatives at {point.label}", inst.get_derivatives,
+                  len(layout.ode_states))
+    except FmiError as exc:
+        at = f" at point {point.label}" if point is not None else ""
+        yield Violation(
+            f"with the enable parameter false the FMU does not run as an ordinary ODE FMU: "
+            f"{exc.call} returned {exc.status}{at}", where,
+            evidence(_error_evidence(exc), sequence=steps.done, mode="ode",
+                     point=point.label if point else None), subject)
+    finally:
+        if inst is not None:
+            inst.free()
+
+
+# ---------------------------------------------------------------- dae-initialization-refused
+
+
+def dae_initialization_refused(ctx: ProbeContext) -> Iterator[Violation]:
+    """DAE-14: fmi3Enter/ExitInitializationMode returns an error in DAE mode (information)."""
+    layout = _layout(ctx)
+    library: Library = ctx.facts["library"]  # type: ignore[assignment]
+    if layout.enable_status == "unusable":
+        raise ProbeSkipped("the enable parameter cannot be used (see the static findings)")
+    inst = _new_instance(library, "init-dae")
+    try:
+        if layout.enable is not None:
+            configure(inst, True)
+        inst.enter_initialization_mode(layout.start_time)
+        inst.exit_initialization_mode()
+    except FmiError as exc:
+        if exc.call not in INIT_CALLS:
+            return  # a failing switch is enable-handshake's finding
+        switched = ctx.dae is not None and getattr(ctx.dae, "started", "") == "runtime-switch"
+        then = ("the probes switch DAE mode on at runtime, from Event Mode" if switched else
+                "DAE mode cannot be probed")
+        yield Violation(
+            f"the FMU refuses to initialise in DAE mode: {exc.call} returned {exc.status}; "
+            f"alpha.1 allows this (DAE-14), {then}",
+            _manifest_location(ctx, layout.enable, ("Enable",)),
+            evidence(_error_evidence(exc), dae_mode_probed="runtime-switch" if switched
+                     else None), subject=exc.call)
+    finally:
+        inst.free()
+
+
+# ------------------------------------------------------------------- algebraic-not-settable
+
+
+def algebraic_not_settable(ctx: ProbeContext, *, step: float = 0.1, rtol: float = 1e-12,
+                           react_rtol: float = 1e-9, max_variables: int = 50
+                           ) -> Iterator[Violation]:
+    """DAE-40: in Continuous-Time Mode every algebraic variable accepts fmi3SetFloat64, reads
+    back the value set, and the residuals or derivatives change with it. Each variable costs
+    two evaluations of every residual and derivative, so a large FMU is checked on a seeded
+    sample of ``max_variables`` of them (all of them are set once at the start point)."""
+    dae = _dae(ctx)
+    layout = _layout(ctx)
+    start = ctx.points[0]
+    dae.set_point(start, algebraic=False)
+    rejected = False
+    for vr in layout.algebraic:  # each on its own, at its value of the start point
+        value = start.values.get(vr, layout.start.get(vr, 0.0))
+        try:
+            dae.set_float64([vr], [value])
+        except FmiError as exc:
+            rejected = True
+            yield Violation(
+                f"fmi3SetFloat64 on the algebraic variable {{subject}} returns {exc.status} in "
+                "Continuous-Time Mode, DAE mode", _manifest_location(ctx, vr,
+                                                                    ("AlgebraicVariable",)),
+                evidence(_error_evidence(exc), point=start.label, value=value),
+                layout.name(vr))
+    if rejected:
+        return
+    watch = list(dict.fromkeys([*layout.residuals, *layout.derivatives]))
+    base = dae.get_float64(watch)
+    chosen = list(layout.algebraic)
+    if len(chosen) > max_variables:
+        picked = ctx.rng.choice(len(chosen), size=max_variables, replace=False)
+        chosen = [chosen[i] for i in sorted(picked)]
+    for vr in chosen:
+        yield from _set_one(ctx, dae, layout, start, vr, watch, base, step=step, rtol=rtol,
+                            react_rtol=react_rtol)
+
+
+def _set_one(ctx: ProbeContext, dae: Instance, layout: Layout, start: Point, vr: int,
+             watch: list[int], base: np.ndarray, *, step: float, rtol: float,
+             react_rtol: float) -> Iterator[Violation]:
+    where = _manifest_location(ctx, vr, ("AlgebraicVariable",))
+    name = layout.name(vr)
+    v0 = start.values.get(vr, layout.start.get(vr, 0.0))
+    delta = step * max(layout.scale(vr), abs(v0))
+    bounds = layout.bounds.get(vr, (-math.inf, math.inf))
+    tried = []
+    for sign in (1.0, -1.0):
+        value = _within(v0 + sign * delta, bounds)
+        dae.set_point(start)
+        dae.set_float64([vr], [value])
+        got = float(dae.get_float64([vr])[0])
+        if not _close(got, value, rtol=rtol, atol=0.0, scale=layout.scale(vr)):
+            yield Violation(
+                "the algebraic variable {subject} does not keep the value set in DAE mode: "
+                "the FMU overwrites it", where,
+                evidence(point=start.label, set=value, read_back=got, rtol=rtol), name)
+            return
+        after = dae.get_float64(watch)
+        tried.append(value)
+        scales = np.array([layout.scale(w) for w in watch])
+        change = np.abs(after - base)
+        if np.any(change > react_rtol * np.maximum(scales, np.abs(base))):
+            return
+        if not _finite(after) or not _finite(base):
+            return  # nan-or-inf owns non-finite values
+    if _declared_anywhere(ctx, vr):
+        yield Violation(
+            "neither the residuals nor the derivatives change when the algebraic variable "
+            "{subject} is set: the FMU does not use the value the importer gives it", where,
+            evidence(point=start.label, values_set=tried, unknowns=[layout.name(w) for w in watch],
+                     relative_tolerance=react_rtol, scale="nominal or magnitude of each unknown"),
+            name)
+
+
+def _declared_anywhere(ctx: ProbeContext, vr: int) -> bool:
+    """Whether a manifest Residual or ContinuousStateDerivative may depend on ``vr``."""
+    if ctx.manifest is None:
+        return False
+    for u in ctx.manifest.structure:
+        if u.kind in ("Residual", "ContinuousStateDerivative"):
+            if u.dependencies is None or vr in u.dependencies:
+                return True
+    return False
+
+
+# ----------------------------------------------------------------- initial-residual-nonzero
+
+
+def initial_residual_nonzero(ctx: ProbeContext, *, rtol: float = 1e-6, atol: float = 1e-10
+                             ) -> Iterator[Violation]:
+    """After initialisation in DAE mode, on a fresh instance, every residual is zero within
+    ``atol + rtol * nominal`` (the residual's own nominal, 1 when it declares none)."""
+    layout = _layout(ctx)
+    if not layout.residuals:
+        return
+    _dae(ctx)
+    with _fresh(ctx, "dae") as inst:
+        values = inst.get_float64(list(layout.residuals))
+        started = inst.started
+    for vr, r in zip(layout.residuals, values):
+        if not math.isfinite(r):
+            continue  # nan-or-inf
+        var = ctx.model.by_vr.get(vr)
+        scale = layout.scale(vr)
+        tol = atol + rtol * scale
+        if abs(r) > tol:
+            source = (f"nominal of '{layout.name(vr)}'" if var is not None and var.nominal
+                      else "default nominal 1")
+            yield Violation(
+                f"the residual {{subject}} is {r:.6g} after initialisation in DAE mode, not "
+                f"zero (tolerance {tol:.3g}): the FMU's initial point is not consistent",
+                _manifest_location(ctx, vr, ("Residual",)),
+                evidence(point="start", value=float(r), scale=scale, scale_source=source,
+                         tolerance=tol, rtol=rtol, atol=atol, started=started),
+                layout.name(vr))
+
+
+# ---------------------------------------------------------------- evaluation-not-repeatable
+
+
+def evaluation_not_repeatable(ctx: ProbeContext, *, rtol: float = 1e-10, atol: float = 1e-14
+                              ) -> Iterator[Violation]:
+    """The same (t, x, w, u) gives the same residuals, derivatives and outputs whatever was
+    evaluated before: points A, B, C evaluated as A B A A C B A, and A, B on a fresh instance."""
+    dae = _dae(ctx)
+    layout = _layout(ctx)
+    unknowns = _unknowns(layout)
+    points = list(ctx.points)
+    if not unknowns or len(points) < 2:
+        return
+    a, b, c = points[0], points[1], points[2 % len(points)]
+    first: dict[str, tuple[np.ndarray, str]] = {}
+    reported: set[int] = set()
+    previous = "initialisation"
+    sequence = []
+    for point in (a, b, a, a, c, b, a):
+        values = dae.evaluate(point, unknowns)
+        sequence.append(point.label)
+        yield from _compare(ctx, layout, unknowns, first, point, values, previous, reported,
+                            rtol=rtol, atol=atol, sequence=sequence)
+        first.setdefault(point.label, (values, previous))
+        previous = point.label
+    with _fresh(ctx, "dae") as fresh:
+        for point in (b, a):
+            values = fresh.evaluate(point, unknowns)
+            yield from _compare(ctx, layout, unknowns, first, point, values,
+                                "initialisation of a fresh instance" if point is b else b.label,
+                                reported, rtol=rtol, atol=atol, sequence=[*sequence, "fresh"])
+
+
+def _compare(ctx: ProbeContext, layout: Layout, unknowns: list[int],
+             first: dict[str, tuple[np.ndarray, str]], point: Point, values: np.ndarray,
+             previous: str, reported: set[int], *, rtol: float, atol: float,
+             sequence: list[str]) -> Iterator[Violation]:
+    if point.label not in first:
+        return
+    ref, ref_previous = first[point.label]
+    for i, vr in enumerate(unknowns):
+        x, y = float(ref[i]), float(values[i])
+        if vr in reported or not (math.isfinite(x) and math.isfinite(y)):
+            continue
+        if not _close(x, y, rtol=rtol, atol=atol, scale=layout.scale(vr)):
+            reported.add(vr)
+            yield Violation(
+                f"{{subject}} takes different values at the same point {point.label}: "
+                f"{x:.17g} (after {ref_previous}) and {y:.17g} (after {previous}); the FMU "
+                "keeps hidden state between evaluations", _unknown_location(ctx, vr),
+                evidence(point=point.label, first=x, second=y, difference=abs(x - y),
+                         tolerance=atol + rtol * max(layout.scale(vr), abs(x), abs(y)),
+                         rtol=rtol, atol=atol, sequence=list(sequence)),
+                layout.name(vr))
+
+
+# ------------------------------------------------------------------------------- nan-or-inf
+
+
+def nan_or_inf(ctx: ProbeContext, *, directional: bool = True) -> Iterator[Violation]:
+    """No NaN or Inf at any sampled point: residuals, derivatives, outputs and algebraic
+    variables in DAE mode; derivatives, outputs and algebraic variables in ODE mode; and, when
+    the FMU provides directional derivatives, J @ 1 in DAE mode (every known at once, so a
+    single non-finite partial shows)."""
+    layout = _layout(ctx)
+    if ctx.dae is None and ctx.ode is None:
+        _dae(ctx)
+    found: dict[str, dict[str, Any]] = {}
+    initial = Point(0.0, {}, "start (as initialised)")
+    for vr, v in dict(ctx.facts.get("start_nonfinite") or {}).items():  # see start_point
+        _note(found, layout.name(vr), _var_location(ctx, vr),
+              "dae" if ctx.dae is not None else "ode", initial, v)
+    for mode, inst in (("dae", ctx.dae), ("ode", ctx.ode)):
+        if inst is None:
+            continue
+        unknowns = list(dict.fromkeys([*_unknowns(layout, mode), *layout.algebraic]))
+        for point in ctx.points:
+            try:
+                values = inst.evaluate(point, unknowns)
+            except (FmiError, PointNotSet):
+                continue  # evaluation-failed, algebraic-not-settable, enable-handshake (ODE)
+            for vr, v in zip(unknowns, values):
+                if not math.isfinite(v):
+                    _note(found, layout.name(vr), _var_location(ctx, vr), mode, point, v)
+    dae = ctx.dae
+    if directional and layout.provides_directional and dae is not None:
+        _directional(ctx, layout, dae, found)
+    for subject, item in found.items():
+        yield Violation(
+            f"{item['what']} {{subject}} is {item['value']} at {len(item['points'])} sampled "
+            f"point(s), first at {item['points'][0]} ({item['mode']} mode)", item["location"],
+            evidence(points=item["points"], value=item["value"], mode=item["mode"],
+                     first_point={"label": item["first"].label, "t": item["first"].t}),
+            subject)
+
+
+def _note(found: dict[str, dict[str, Any]], subject: str, location: Location, mode: str,
+          point: Point, value: float, what: str = "") -> None:
+    item = found.setdefault(subject, {
+        "what": what or "the value of", "location": location, "mode": mode, "points": [],
+        "value": repr(float(value)), "first": point})
+    if point.label not in item["points"]:
+        item["points"].append(point.label)
+
+
+def _directional(ctx: ProbeContext, layout: Layout, dae: Instance,
+                 found: dict[str, dict[str, Any]]) -> None:
+    unknowns = _unknowns(layout)
+    knowns = list(dict.fromkeys([*layout.states, *layout.algebraic, *layout.inputs]))
+    if not unknowns or not knowns:
+        return
+    seed = np.ones(len(knowns))
+    for point in ctx.points:
+        try:
+            column = dae.directional(point, unknowns, knowns, seed)
+        except (FmiError, PointNotSet):
+            return  # the derivative probes report a failing fmi3GetDirectionalDerivative
+        for vr, v in zip(unknowns, column):
+            if not math.isfinite(v):
+                _note(found, f"d({layout.name(vr)})", _unknown_location(ctx, vr), "dae", point,
+                      v, what="the directional derivative (all knowns seeded with 1)")
+
+
+# -------------------------------------------------------------------------- evaluation-failed
+
+
+def evaluation_failed(ctx: ProbeContext) -> Iterator[Violation]:
+    """DAE-41: in DAE mode, at every sampled point, time, states and inputs can be set and the
+    residuals, derivatives and outputs read (fmi3GetFloat64, fmi3GetContinuousStateDerivatives).
+    A rejected algebraic variable is algebraic-not-settable's finding: the probe is skipped."""
+    dae = _dae(ctx)
+    layout = _layout(ctx)
+    unknowns = _unknowns(layout)
+    for point in ctx.points:
+        try:
+            dae.set_point(point, algebraic=False)
+        except FmiError as exc:
+            yield Violation(
+                f"setting time, states and inputs in DAE mode fails at point {point.label}: "
+                f"{exc.call} returned {exc.status}", _root_location(ctx),
+                evidence(_error_evidence(exc), point=point.label, t=point.t), subject=exc.call)
+            continue
+        values = [point.values[vr] for vr in layout.algebraic if vr in point.values]
+        try:
+            dae.set_float64([vr for vr in layout.algebraic if vr in point.values], values)
+        except FmiError as exc:  # algebraic-not-settable reports it
+            raise PointNotSet(point, exc) from None
+        for call, read in (("fmi3GetFloat64", lambda: dae.get_float64(unknowns)),
+                           ("fmi3GetContinuousStateDerivatives",
+                            lambda: dae.get_derivatives(len(layout.states)))):
+            try:
+                read()
+            except FmiError as exc:
+                yield Violation(
+                    f"reading the residuals, derivatives and outputs in DAE mode fails at "
+                    f"point {point.label}: {exc.call} returned {exc.status}",
+                    _root_location(ctx),
+                    evidence(_error_evidence(exc), point=point.label, t=point.t,
+                             unknowns=[layout.name(vr) for vr in unknowns]),
+                    subject=exc.call)
+                break
+
+
+PROBES = {
+    "DAE710": enable_handshake,
+    "DAE711": dae_initialization_refused,
+    "DAE720": algebraic_not_settable,
+    "DAE721": initial_residual_nonzero,
+    "DAE722": evaluation_not_repeatable,
+    "DAE723": nan_or_inf,
+    "DAE724": evaluation_failed,
+}

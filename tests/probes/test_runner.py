@@ -1,0 +1,292 @@
+"""The probe runner: what is probed and what is skipped, isolation, limits, determinism."""
+from __future__ import annotations
+
+import dataclasses
+import zipfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from conformance.catalogue import Catalogue, default_catalogue
+from conformance.engine import EngineOptions, check_fmu, check_paths
+from conformance.findings import Severity
+from conformance.manifest import MANIFEST
+from conformance.probes import runner
+from conformance.probes.api import Point
+from conformance.probes.registry import PROBES
+from conformance.probes.sampling import near_points, start_point
+from conformance.probes.session import CallRecord, Layout
+from tests.demo_legacy import FORMULATION_MANIFEST
+from tests.probes.variants import variant
+from tests.scenes.build import build_scene
+
+CATALOGUE = default_catalogue()
+PROBE_CODES = {r.code for r in CATALOGUE if r.stage == "probe"}
+
+
+def _probe_findings(report):
+    return [f for f in report.findings if f.code in PROBE_CODES]
+
+
+def _probe_skips(report):
+    return {c: r for c, r in report.rules_skipped if c in PROBE_CODES}
+
+
+def _rewrite(src: Path, dest: Path, *, drop=lambda name: False, replace=None) -> Path:
+    """A copy of the FMU ``src`` without the members ``drop`` selects, some replaced."""
+    replace = replace or {}
+    with zipfile.ZipFile(src) as zin, zipfile.ZipFile(dest, "w", zipfile.ZIP_DEFLATED) as zout:
+        for info in zin.infolist():
+            if drop(info.filename):
+                continue
+            zout.writestr(info, replace.get(info.filename, zin.read(info)))
+    return dest
+
+
+def _catalogue(**options) -> Catalogue:
+    """The default catalogue with some options of the runner rules changed."""
+    rules = []
+    for rule in CATALOGUE:
+        if rule.name in runner.RUNNER_RULES:
+            opts = dict(rule.options)
+            opts.update({k: v for k, v in options.items() if k in opts})
+            rule = dataclasses.replace(rule, options=tuple(sorted(opts.items())))
+        rules.append(rule)
+    return Catalogue(rules)
+
+
+# ------------------------------------------------------------------------ catalogue
+
+def test_probe_registry_matches_probe_catalogue():
+    emitted_by_runner = {CATALOGUE[n].code for n in runner.RUNNER_RULES}
+    assert set(PROBES) - PROBE_CODES == set(), "probes without a probe-stage catalogue entry"
+    assert PROBE_CODES - set(PROBES) - emitted_by_runner == set(), "probe rules nobody runs"
+    assert set(PROBES) & emitted_by_runner == set()
+
+
+def test_limits_come_from_the_catalogue():
+    limits = runner.Limits.from_rules({n: CATALOGUE[n] for n in runner.RUNNER_RULES})
+    assert limits == runner.Limits()  # the catalogue defaults are the documented defaults
+    assert limits.probe_seconds > 0 and limits.fmu_seconds >= limits.probe_seconds
+
+
+# ------------------------------------------------------------------- what is probed
+
+def test_no_binary_for_this_platform_skips_every_probe(tmp_path):
+    fmu = _rewrite(build_scene("HelloWorldDAE"), tmp_path / "nobinary.fmu",
+                   drop=lambda n: n.startswith("binaries/"))
+    report = check_fmu(fmu, options=EngineOptions(probes=True))
+    skips = _probe_skips(report)
+    assert set(skips) == PROBE_CODES
+    assert set(skips.values()) == {f"no binary for {runner.host_platform_tuple()}"}
+    assert _probe_findings(report) == []
+
+
+def test_no_probes_option_skips_with_its_own_reason():
+    report = check_fmu(build_scene("Robertson"), options=EngineOptions(probes=False))
+    assert set(_probe_skips(report).values()) == {"probes turned off (--no-probes)"}
+
+
+def test_unparseable_manifest_leaves_nothing_to_probe():
+    fmu = variant("HelloWorldDAE", manifest_edits=[("<ModelStructure>", "<ModelStructure")])
+    report = check_fmu(fmu, options=EngineOptions(probes=True))
+    skips = _probe_skips(report)
+    assert set(skips) == PROBE_CODES
+    assert all("manifest" in r for r in skips.values())
+    assert "nothing to check or probe" in dict(report.info)["manifest"]
+
+
+def test_fmu_without_manifest_is_not_probed(tmp_path):
+    fmu = _rewrite(build_scene("HelloWorldDAE"), tmp_path / "plain.fmu",
+                   drop=lambda n: n == MANIFEST)
+    report = check_fmu(fmu, options=EngineOptions(probes=True))
+    assert set(_probe_skips(report)) == PROBE_CODES
+
+
+def test_dae_only_fmu_is_probed_in_dae_mode_after_the_static_error():
+    fmu = variant("HelloWorldDAE", defines=["DEFECT_DAE_ONLY"],
+                  manifest_edits=[('<EnableDAEParameter valueReference="1"/>', "")])
+    report = check_fmu(fmu, options=EngineOptions(probes=True))
+    assert "DAE201" in {f.code for f in report.findings}  # enable-parameter-missing (static)
+    assert _probe_findings(report) == []
+    ran = set(report.rules_run)
+    for name in ("algebraic-not-settable", "initial-residual-nonzero", "nan-or-inf",
+                 "evaluation-not-repeatable", "enable-handshake"):
+        assert CATALOGUE[name].code in ran, name
+
+
+def test_refused_dae_initialisation_falls_back_to_a_runtime_switch():
+    # SimpleDAE's switch is tunable: initialise in ODE mode, switch in Reconfiguration Mode
+    report = check_fmu(build_scene("SimpleDAE", defines=["DEFECT_DAE_INIT_REFUSED"]),
+                       options=EngineOptions(probes=True))
+    (finding,) = _probe_findings(report)
+    assert finding.name == "dae-initialization-refused" and finding.severity == Severity.INFO
+    assert finding.evidence_dict()["dae_mode_probed"] == "runtime-switch"
+    assert _probe_skips(report) == {}
+
+
+@pytest.mark.parametrize("shape", ["formulation", "by-name"])
+def test_legacy_manifest_shapes_are_probed(tmp_path, shape):
+    text = FORMULATION_MANIFEST
+    if shape == "by-name":  # LS-int SimpleDAE: the switch named in a root attribute
+        text = text.replace('  <EnableDAE valueReference="1"/>\n', "").replace(
+            "<fmiLayeredStandardManifest\n", '<fmiLayeredStandardManifest enableDAEModeVariable="dae"\n')
+    fmu = _rewrite(build_scene("HelloWorldDAE"), tmp_path / f"{shape}.fmu",
+                   replace={MANIFEST: text.encode()})
+    report = check_fmu(fmu, options=EngineOptions(probes=True, probes_only=True))
+    assert _probe_findings(report) == []
+    assert _probe_skips(report) == {}
+    assert CATALOGUE["initial-residual-nonzero"].code in report.rules_run
+
+
+# ------------------------------------------------------------------ isolation, limits
+
+def test_one_worker_per_fmu(monkeypatch):
+    starts = []
+    original = runner._Driver._start
+
+    def counting(self):
+        starts.append(1)
+        return original(self)
+
+    monkeypatch.setattr(runner._Driver, "_start", counting)
+    check_fmu(build_scene("SimpleDAE"), options=EngineOptions(probes=True))
+    assert len(starts) == 1
+
+
+def test_fatal_status_restarts_the_worker_without_a_finding(monkeypatch):
+    starts = []
+    original = runner._Driver._start
+
+    def counting(self):
+        starts.append([r.code for r in self.remaining])
+        return original(self)
+
+    monkeypatch.setattr(runner._Driver, "_start", counting)
+    fmu = build_scene("HelloWorldDAE", defines=["DEFECT_FATAL_DIRECTIONAL"])
+    report = check_fmu(fmu, options=EngineOptions(probes=True,
+                                                  select=("DAE7",), ignore=("DAE74",)))
+    nan = CATALOGUE["nan-or-inf"].code
+    assert len(starts) == 2 and nan in starts[0] and nan not in starts[1]
+    assert not [f for f in report.findings if f.name in runner.RUNNER_RULES]
+    assert CATALOGUE["evaluation-failed"].code in report.rules_run
+
+
+def test_crash_is_a_finding_and_the_next_fmu_is_checked():
+    crashing = build_scene("HelloWorldDAE", defines=["DEFECT_SEGFAULT_GETFLOAT64"])
+    clean = build_scene("Robertson")
+    report = check_paths([crashing, clean], options=EngineOptions(probes=True))
+    first, second = report.fmus
+    crashed = [f for f in first.findings if f.name == "binary-crashed"]
+    assert crashed and all(f.severity == Severity.ERROR for f in crashed)
+    ev = crashed[0].evidence_dict()
+    assert ev["call"] == "fmi3GetFloat64" and ev["call_in_progress"] is True
+    assert ev["exit"] == "killed by SIGSEGV"
+    assert not [f for f in second.findings if f.name in runner.RUNNER_RULES]
+    assert CATALOGUE["nan-or-inf"].code in second.rules_run
+
+
+def test_findings_of_probes_before_a_crash_are_kept():
+    # enable-handshake (first) fails on the ODE derivatives; the crash comes later
+    fmu = build_scene("HelloWorldDAE", defines=["DEFECT_ODE_DERIVATIVES_FAIL",
+                                                "DEFECT_SEGFAULT_GETFLOAT64"])
+    report = check_fmu(fmu, options=EngineOptions(probes=True))
+    names = {f.name for f in report.findings}
+    assert {"enable-handshake", "binary-crashed"} <= names
+
+
+def test_per_fmu_time_limit_skips_the_rest(tmp_path):
+    fmu = build_scene("SimpleDAE", defines=["DEFECT_HANG_DIRECTIONAL"])
+    catalogue = _catalogue(probe_seconds=30.0, fmu_seconds=3.0)
+    report = check_fmu(fmu, options=EngineOptions(probes=True), catalogue=catalogue)
+    timed_out = [f for f in report.findings if f.name == "binary-timed-out"]
+    assert len(timed_out) == 1
+    ev = timed_out[0].evidence_dict()
+    assert ev["limit"] == "per FMU" and ev["call"] == "fmi3GetDirectionalDerivative"
+    skips = _probe_skips(report)
+    assert skips and all("per-FMU time limit" in r for r in skips.values())
+
+
+def test_memory_limit_is_an_option():
+    fmu = build_scene("HelloWorldDAE", defines=["DEFECT_MEMORY_BLOWUP"])
+    report = check_fmu(fmu, options=EngineOptions(probes=True),
+                       catalogue=_catalogue(address_space_mib=768))
+    found = [f for f in report.findings if f.name == "binary-memory-limit"]
+    assert found and found[0].evidence_dict()["limit_mib"] == 768
+    assert not [f for f in report.findings if f.name == "binary-crashed"]
+
+
+def test_a_missing_fmi_function_is_not_loadable():
+    report = check_fmu(build_scene("Robertson", defines=["DEFECT_MISSING_EXPORT"]),
+                       options=EngineOptions(probes=True))
+    (finding,) = _probe_findings(report)
+    assert finding.name == "binary-not-loadable"
+    error = finding.evidence_dict()["error"]
+    assert "fmi3GetClock" in error
+    assert "/tmp" not in error  # no temporary path: reports are reproducible
+
+
+# --------------------------------------------------------------------- points, seeds
+
+def test_points_and_seed_are_recorded_and_deterministic():
+    fmu = build_scene("Robertson")
+    a = check_fmu(fmu, options=EngineOptions(probes=True, seed=7))
+    b = check_fmu(fmu, options=EngineOptions(probes=True, seed=7))
+    c = check_fmu(fmu, options=EngineOptions(probes=True, seed=8))
+    info = dict(a.info)
+    assert info["seed"] == 7
+    points = info["points"]
+    assert points[0][0] == ("label", "start") and len(points) == 4
+    assert a == b
+    assert dict(c.info)["points"] != points
+
+
+def test_crash_reports_are_deterministic():
+    fmu = build_scene("Robertson", defines=["DEFECT_EXIT_IN_CALL"])
+    a = check_fmu(fmu, options=EngineOptions(probes=True))
+    b = check_fmu(fmu, options=EngineOptions(probes=True))
+    assert a.findings == b.findings and a.findings
+
+
+def _layout(bounds) -> Layout:
+    return Layout(states=(1,), derivatives=(2,), ode_states=(1,), ode_derivatives=(2,),
+                  algebraic=(3,), residuals=(4,), inputs=(), outputs=(), ode_outputs=(),
+                  enable=None, enable_status="absent", enable_tunable=False, token="",
+                  model_identifier="M", nominal={1: 1e-5, 3: 1.0}, bounds=bounds)
+
+
+def test_near_points_stay_within_bounds_and_scale_with_nominal():
+    layout = _layout({1: (0.0, 2e-6), 3: (0.9, 1.0)})
+    start = Point(0.0, {1: 1e-6, 3: 1.0}, "start")
+    points = near_points(start, layout, np.random.default_rng(3), count=50)
+    assert all(0.0 <= p.values[1] <= 2e-6 and 0.9 <= p.values[3] <= 1.0 for p in points)
+    assert all(p.t >= start.t for p in points)
+    spread = np.std([p.values[1] for p in points])
+    assert 1e-8 < spread < 1e-5   # perturbed on the scale of the nominal, not of 1
+    again = near_points(start, layout, np.random.default_rng(3), count=50)
+    assert again == points
+
+
+def test_start_point_keeps_finite_values_and_notes_the_others():
+    class FakeInstance:
+        mode = "dae"
+
+        def get_float64(self, vrs):
+            return np.array([{1: 0.5, 3: float("nan")}[vr] for vr in vrs])
+
+    layout = dataclasses.replace(_layout({}), start={3: 0.25})
+    noted: dict[int, float] = {}
+    point = start_point(FakeInstance(), layout, noted)  # type: ignore[arg-type]
+    assert point.values == {1: 0.5, 3: 0.25}
+    assert list(noted) == [3] and np.isnan(noted[3])
+
+
+def test_call_record_round_trip():
+    record = CallRecord()
+    record.set_probe("DAE720")
+    record.enter("fmi3GetDirectionalDerivative")
+    assert CallRecord.parse(record.buffer) == ("DAE720", "fmi3GetDirectionalDerivative", True)
+    record.leave()
+    assert CallRecord.parse(record.buffer)[2] is False
+    assert CallRecord.parse(b"") == ("", "", False)

@@ -260,18 +260,24 @@ def _read(source, name: str, collector: _Collector) -> bytes | None:
     return None
 
 
+def _read_xml(source, name: str, collector: _Collector, texts: dict[str, bytes]):
+    """Read and safely parse one XML member; keep its bytes for source excerpts."""
+    data = _read(source, name, collector)
+    if data is None:
+        return None
+    texts[name] = data
+    tree, violations = parse_xml(data, file=name)
+    collector.add_stage(violations)
+    return tree
+
+
 def _read_model(source, names: Sequence[str], options: EngineOptions, collector: _Collector,
                 texts: dict[str, bytes]) -> ModelDescription | None:
     if MODEL_DESCRIPTION not in names:
         collector.emit("model-description-missing", Violation(
             "the FMU has no modelDescription.xml at its root", Location(file=MODEL_DESCRIPTION)))
         return None
-    data = _read(source, MODEL_DESCRIPTION, collector)
-    if data is None:
-        return None
-    texts[MODEL_DESCRIPTION] = data
-    tree, violations = parse_xml(data, file=MODEL_DESCRIPTION)
-    collector.add_stage(violations)
+    tree = _read_xml(source, MODEL_DESCRIPTION, collector, texts)
     if tree is None:
         return None
     if not options.probes_only:
@@ -286,12 +292,7 @@ def _read_manifest(source, names: Sequence[str], options: EngineOptions, collect
             f"no {MANIFEST}: this is an ordinary Model Exchange FMU, the DAE rules are skipped",
             Location(file=MANIFEST)))
         return None
-    data = _read(source, MANIFEST, collector)
-    if data is None:
-        return None
-    texts[MANIFEST] = data
-    tree, violations = parse_xml(data, file=MANIFEST)
-    collector.add_stage(violations)
+    tree = _read_xml(source, MANIFEST, collector, texts)
     if tree is None:
         state.info["manifest"] = "unreadable: nothing to check or probe"
         return None

@@ -21,6 +21,17 @@ def evidence(mapping: Mapping[str, Any] | None = None, **items: Any) -> Evidence
     return tuple((k, _freeze(v)) for k, v in pairs.items())
 
 
+def thaw(value: Any) -> Any:
+    """The inverse of :func:`evidence`'s freezing: pairs with string keys become dicts,
+    other tuples lists (for reporters that write JSON-like structures)."""
+    if isinstance(value, tuple):
+        if value and all(isinstance(v, tuple) and len(v) == 2 and isinstance(v[0], str)
+                         for v in value):
+            return {k: thaw(v) for k, v in value}
+        return [thaw(v) for v in value]
+    return value
+
+
 def _freeze(value: Any) -> Any:
     if isinstance(value, list):
         return tuple(_freeze(v) for v in value)

@@ -16,7 +16,7 @@ from typing import Any, Iterable
 
 from ..catalogue import Catalogue
 from ..drafts import DRAFT_LABELS
-from ..findings import Finding, FmuReport, Report, RunInfo, Severity
+from ..findings import Finding, FmuReport, Report, RunInfo, Severity, thaw
 from . import html_plots
 
 log = logging.getLogger(__name__)
@@ -250,16 +250,6 @@ def _rules_run(fmu: FmuReport) -> str:
     return (f"<details><summary>Rules run ({len(fmu.rules_run)}) and skipped "
             f"({len(fmu.rules_skipped)})</summary><p><code>{escape(run)}</code></p>{table}"
             "</details>")
-
-
-def thaw(value: Any) -> Any:
-    """Evidence-style frozen values back to dicts and lists (pairs with string keys -> dict)."""
-    if isinstance(value, tuple):
-        if value and all(isinstance(v, tuple) and len(v) == 2 and isinstance(v[0], str)
-                         for v in value):
-            return {k: thaw(v) for k, v in value}
-        return [thaw(v) for v in value]
-    return value
 
 
 def _text(value: Any) -> str:

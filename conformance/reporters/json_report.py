@@ -2,22 +2,27 @@
 from __future__ import annotations
 
 import json
+import math
 from typing import Any
 
 from ..catalogue import Catalogue
 from ..drafts import DRAFT_LABELS
-from ..findings import Finding, FmuReport, Report, Severity
+from ..findings import Finding, FmuReport, Report, Severity, thaw
 
 SCHEMA_VERSION = 1
 
 
-def _plain(value: Any) -> Any:
-    if isinstance(value, tuple):
-        if value and all(isinstance(v, tuple) and len(v) == 2 and isinstance(v[0], str)
-                         for v in value):
-            return {k: _plain(v) for k, v in value}
-        return [_plain(v) for v in value]
-    if isinstance(value, float) and (value != value or value in (float("inf"), float("-inf"))):
+def plain(value: Any) -> Any:
+    """Frozen evidence as strict JSON: dicts and lists, non-finite floats as strings."""
+    return _finite(thaw(value))
+
+
+def _finite(value: Any) -> Any:
+    if isinstance(value, dict):
+        return {k: _finite(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [_finite(v) for v in value]
+    if isinstance(value, float) and not math.isfinite(value):
         return repr(value)
     return value
 
@@ -27,7 +32,7 @@ def finding_dict(f: Finding) -> dict[str, Any]:
     return {
         "code": f.code, "name": f.name, "severity": str(f.severity), "message": f.message,
         "file": loc.file, "line": loc.line, "column": loc.column, "path": loc.path,
-        "subject": f.subject, "count": f.count, "evidence": _plain(f.evidence),
+        "subject": f.subject, "count": f.count, "evidence": plain(f.evidence),
     }
 
 
@@ -38,7 +43,7 @@ def fmu_dict(fmu: FmuReport) -> dict[str, Any]:
         "draft_label": DRAFT_LABELS.get(fmu.draft) if fmu.draft else None,
         "summary": {str(s): fmu.count(s) for s in (Severity.ERROR, Severity.WARNING,
                                                    Severity.INFO)},
-        "info": _plain(fmu.info),
+        "info": plain(fmu.info),
         "findings": [finding_dict(f) for f in fmu.findings],
         "rules_run": list(fmu.rules_run),
         "rules_skipped": [{"code": c, "reason": r} for c, r in fmu.rules_skipped],
@@ -48,7 +53,7 @@ def fmu_dict(fmu: FmuReport) -> dict[str, Any]:
 def report_dict(report: Report) -> dict[str, Any]:
     return {
         "tool": "lsdae", "version": report.tool_version, "schema_version": SCHEMA_VERSION,
-        "options": _plain(report.options), "fmus": [fmu_dict(f) for f in report.fmus],
+        "options": plain(report.options), "fmus": [fmu_dict(f) for f in report.fmus],
     }
 
 

@@ -22,7 +22,7 @@ from urllib.parse import quote
 
 from ..catalogue import Catalogue, RuleSpec
 from ..findings import Finding, FmuReport, Report, Severity
-from .json_report import _plain
+from .json_report import plain
 
 SCHEMA_URI = "https://json.schemastore.org/sarif-2.1.0.json"
 SARIF_VERSION = "2.1.0"
@@ -257,7 +257,7 @@ def _result(fmu: FmuReport, finding: Finding, rule_index: int, seen: dict[str, i
         if value is not None:
             properties[key] = value
     if finding.evidence:
-        properties["evidence"] = _plain(finding.evidence)
+        properties["evidence"] = plain(finding.evidence)
     result: dict[str, Any] = {
         "ruleId": finding.code,
         "ruleIndex": rule_index,
@@ -282,7 +282,7 @@ def _invocation(report: Report) -> dict[str, Any]:
         invocation["toolExecutionNotifications"] = [
             {"level": "error", "message": {"text": f"{fmu.path}: {f.message}"},
              "descriptor": {"id": f.code}} for fmu, f in failures]
-    invocation["properties"] = {"options": _plain(report.options)}
+    invocation["properties"] = {"options": plain(report.options)}
     return invocation
 
 

@@ -36,6 +36,7 @@ test: $(STAMP)
 bench: $(STAMP)
 	$(BIN)/python -m bench.static_bench --out reports/bench
 	$(BIN)/python -m bench.probe_bench --out reports/bench
+	$(BIN)/python -m bench.sim_bench --out reports/bench
 
 clean:
 	rm -rf build .cache

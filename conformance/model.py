@@ -96,6 +96,22 @@ class ModelExchange:
         return dict(self.attributes).get(name, "false").strip() in ("true", "1")
 
 
+class DefaultExperiment(NamedTuple):
+    """``<DefaultExperiment>``: the exporter's suggested run (None where absent or malformed)."""
+
+    start_time: float | None = None
+    stop_time: float | None = None
+    tolerance: float | None = None
+    step_size: float | None = None
+
+
+def _float(text: str | None) -> float | None:
+    try:
+        return float(text) if text is not None else None
+    except ValueError:
+        return None
+
+
 @dataclass(frozen=True)
 class ModelDescription:
     """The parts of modelDescription.xml the DAE rules need."""
@@ -110,6 +126,7 @@ class ModelDescription:
     structure: tuple[Unknown, ...]
     line: int | None = None
     has_co_simulation: bool = False
+    default_experiment: DefaultExperiment | None = None
     by_vr: Mapping[int, Variable] = field(default_factory=dict, init=False, repr=False,
                                           compare=False, hash=False)
 
@@ -301,4 +318,12 @@ def read_model_description(tree: etree._ElementTree, *, file: str = MODEL_DESCRI
         naming_convention=root.get("variableNamingConvention", "flat"),
         model_exchange=me, variables=tuple(variables), structure=tuple(structure),
         line=root.sourceline, has_co_simulation=_first(root, "CoSimulation") is not None,
+        default_experiment=_default_experiment(_first(root, "DefaultExperiment")),
     )
+
+
+def _default_experiment(el: etree._Element | None) -> DefaultExperiment | None:
+    if el is None:
+        return None
+    return DefaultExperiment(_float(el.get("startTime")), _float(el.get("stopTime")),
+                             _float(el.get("tolerance")), _float(el.get("stepSize")))

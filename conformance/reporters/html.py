@@ -167,6 +167,9 @@ def _fmu_section(index: int, fmu: FmuReport, catalogue: Catalogue | None) -> str
     else:
         out.append('<p class="noplot">No findings.</p>')
     out += _plots(fmu, info)
+    if isinstance(info.get("simulation"), dict) and info["simulation"].get("times"):
+        out += ["<h3>Simulation</h3>",
+                _plot(lambda: html_plots.trajectory(info["simulation"]))]
     out.append(_rules_run(fmu))
     out.append("</section>")
     return "\n".join(out)

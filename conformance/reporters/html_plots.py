@@ -186,3 +186,63 @@ def probe_errors(entries: Sequence[Mapping[str, Any]]) -> Plot:
         else ""
     caption = f"{len(bars)} probe measurements, {failing} above tolerance.{more}"
     return Plot(uri, "Probe error relative to tolerance, per measurement. " + caption, caption)
+
+
+MAX_SERIES = 8             # trajectory panels drawn; states first, then algebraic variables
+
+
+def trajectory(simulation: Mapping[str, Any]) -> Plot:
+    """The simulated trajectories: one small panel per variable, DAE mode solid, ODE dashed.
+
+    ``simulation`` is ``info["simulation"]`` (docs/simulate.md): ``times``, ``series`` by name,
+    ``status``, ``t_end``, ``rtol``, ``steps``, and optionally ``ode`` with the same shape.
+    """
+    import matplotlib
+
+    times = [float(t) for t in simulation.get("times", [])]
+    series = dict(simulation.get("series", {}))
+    ode = simulation.get("ode") if isinstance(simulation.get("ode"), dict) else None
+    names = list(series)[:MAX_SERIES]
+    positive = [t for t in times if t > 0]
+    log_time = bool(positive) and max(positive) / min(positive) > 1e3
+    cols = 2 if len(names) > 1 else 1
+    rows = max(1, math.ceil(len(names) / cols))
+    with matplotlib.rc_context(_RC):
+        fig = _figure(8.0, 0.6 + 1.7 * rows)
+        axes = fig.subplots(rows, cols, squeeze=False)
+        for k, name in enumerate(names):
+            ax = axes[k // cols][k % cols]
+            _line(ax, times, series[name], log_time, "-", _BOTH, "DAE (IDA)")
+            if ode and name in ode.get("series", {}):
+                _line(ax, [float(t) for t in ode.get("times", [])], ode["series"][name],
+                      log_time, "--", _UNDECLARED, "ODE (CVODE)")
+            if simulation.get("status") not in (None, "ok"):
+                ax.axvline(float(simulation.get("t_end", times[-1] if times else 0)),
+                           color=_FAIL, linewidth=1.0, linestyle=":")
+            ax.set_title(name, loc="left")
+            ax.grid(True, color="#e5e5e5", linewidth=0.5)
+        for k in range(len(names), rows * cols):
+            axes[k // cols][k % cols].set_visible(False)
+        if ode:
+            axes[0][0].legend(loc="best", fontsize=8)
+        for ax in axes[-1]:
+            ax.set_xlabel("time" + (" (log scale)" if log_time else ""))
+        uri = _encode(fig, png=False)
+    status = simulation.get("status", "?")
+    caption = (f"{simulation.get('mode', 'dae').upper()} mode, rtol {simulation.get('rtol')}, "
+               f"{simulation.get('steps', '?')} steps, status {status}"
+               + (f", stopped at t = {simulation.get('t_end')}" if status != "ok" else "")
+               + (f"; {len(series) - len(names)} more variables not drawn"
+                  if len(series) > len(names) else "") + ".")
+    return Plot(uri, "Simulated trajectories. " + caption, caption)
+
+
+def _line(ax, times: Sequence[float], values: Sequence[Any], log_time: bool, style: str,
+          colour: str, label: str) -> None:
+    pairs = [(t, float(v)) for t, v in zip(times, values)
+             if v is not None and math.isfinite(float(v)) and (t > 0 or not log_time)]
+    if pairs:
+        ax.plot([p[0] for p in pairs], [p[1] for p in pairs], style, color=colour,
+                linewidth=1.2, label=label)
+    if log_time:
+        ax.set_xscale("log")

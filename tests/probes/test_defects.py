@@ -6,10 +6,11 @@ import pytest
 from conformance.catalogue import default_catalogue
 from conformance.engine import EngineOptions, check_fmu
 from conformance.findings import Severity
-from tests.probes import defects_basic, defects_derivatives
+from tests.probes import defects_basic, defects_derivatives, defects_simulation
 from tests.probes.variants import Defect, build
 
-DEFECTS: list[Defect] = [*defects_basic.DEFECTS, *defects_derivatives.DEFECTS]
+DEFECTS: list[Defect] = [*defects_basic.DEFECTS, *defects_derivatives.DEFECTS,
+                         *defects_simulation.DEFECTS]
 PROBE_RULES = [r for r in default_catalogue() if r.stage == "probe"]
 
 

@@ -204,3 +204,22 @@ def _headless(page: Path, shot: Path, tmp_path: Path) -> str:
            page.as_uri()]
     done = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
     return done.stdout + done.stderr
+
+
+def test_simulation_trajectory_is_drawn_with_both_modes():
+    sim = {"mode": "dae", "status": "stopped", "t_end": 0.8, "rtol": 1e-6, "steps": 40,
+           "times": [0.0, 0.4, 0.8], "series": {"y1": [2.0, 1.7, 1.0], "y2": [0.0, -1.0, -9.0]},
+           "ode": {"times": [0.0, 0.4, 0.8], "series": {"y1": [2.0, 1.7, 1.1]}}}
+    fmu = FmuReport(path="vdp.fmu", draft="alpha1", findings=(),
+                    info=evidence(simulation=sim))
+    page = render(Report(tool_version="0", fmus=(fmu,)))
+    assert "<h3>Simulation</h3>" in page
+    images = re.findall(r'<img src="data:image/svg\+xml;base64,([^"]+)"', page)
+    assert images and all(base64.b64decode(i).startswith(b"<?xml") for i in images)
+    assert "stopped at t = 0.8" in page
+
+
+def test_no_simulation_no_section():
+    page = render(Report(tool_version="0", fmus=(FmuReport(path="a.fmu", draft=None,
+                                                             findings=()),)))
+    assert "<h3>Simulation</h3>" not in page

@@ -1,0 +1,143 @@
+"""ODE mode with SUNDIALS CVODE (BDF): the FMU with its enable parameter false.
+
+In ODE mode the FMU solves g = 0 itself; the integrator sees ``x' = f(t, x)`` and the Jacobian
+``df/dx`` from the FMU's directional derivatives (total derivatives in this mode). The algebraic
+variables are read from the FMU at the output times, so the trajectory has the same columns as
+in DAE mode and the two can be compared (``compare.py``). Tolerances, limits and the handling of
+failed evaluations are those of DAE mode (``dae.py``): NaN in the right-hand side makes CVODE's
+Newton iteration fail, and CVODE cuts the step.
+"""
+from __future__ import annotations
+
+from typing import Protocol, Sequence
+
+import numpy as np
+
+from .limits import Budget, EvaluationFailed, Stepper, Stop, blame_failures
+from .settings import BUDGET, FMU_FAILED, OK, SOLVER, Settings, Trajectory
+
+
+class OdeSystem(Protocol):
+    """``x' = f(t, x)``, plus the algebraic variables the model computes along the way."""
+
+    nx: int
+    names: Sequence[str]
+    algebraic_names: Sequence[str]
+    nominal: np.ndarray          # (nx,)
+    jacobian_source: str
+    fmi_calls: int
+
+    def evaluate(self, t: float, x: np.ndarray) -> np.ndarray: ...
+
+    def partials(self, t: float, x: np.ndarray) -> np.ndarray: ...
+
+    def algebraic_values(self, t: float, x: np.ndarray) -> np.ndarray: ...
+
+
+def integrate_ode(system: OdeSystem, settings: Settings, *, t0: float, x0: np.ndarray,
+                  stop: float, times: np.ndarray | None = None,
+                  algebraic_nominal: np.ndarray | None = None) -> Trajectory:
+    """Integrate ``x' = f(t, x)`` from ``x0`` at ``t0`` to ``stop``; never raises for a bad
+    model: every way a run can end is a :class:`Trajectory` status."""
+    from sksundae.cvode import CVODE
+
+    times = settings.times(t0, stop) if times is None else np.asarray(times, dtype=float)
+    nx, nw = system.nx, len(system.algebraic_names)
+    atol = settings.atol_factor * settings.rtol * np.asarray(system.nominal, dtype=float)
+    w_nominal = np.ones(nw) if algebraic_nominal is None else np.asarray(algebraic_nominal)
+    budget = Budget(max_steps=settings.max_steps, wall_seconds=settings.wall_seconds,
+                    stall_steps=settings.stall_steps)
+    values = np.full((len(times), nx + nw), np.nan)
+    traj = Trajectory(mode="ode", names=[*system.names, *system.algebraic_names],
+                      kinds=["state"] * nx + ["algebraic"] * nw,
+                      times=[float(t) for t in times], values=values, t_start=t0, t_end=t0,
+                      stop_time=stop, rtol=settings.rtol,
+                      atol=[float(a) for a in atol] + list(
+                          settings.atol_factor * settings.rtol * w_nominal),
+                      jacobian=system.jacobian_source)
+    counts = {"rhs": 0, "jac": 0}
+    failures: list[tuple[float, str, str]] = []
+    calls0 = system.fmi_calls
+    reached = 0
+
+    def rhs(t: float, x: np.ndarray, xp: np.ndarray) -> None:
+        budget.check_clock(t)
+        counts["rhs"] += 1
+        try:
+            value = system.evaluate(t, x)
+        except EvaluationFailed as exc:
+            failures.append((t, exc.call, exc.status))
+            if not exc.recoverable:
+                raise Stop(FMU_FAILED, f"{exc.call} returned {exc.status}", t, call=exc.call,
+                           status=exc.status, log=list(exc.log)[:5]) from None
+            xp[:] = np.nan
+            return
+        if not np.all(np.isfinite(value)):
+            failures.append((t, "non-finite values", "NaN or Inf"))
+        xp[:] = value
+
+    last: dict[str, np.ndarray] = {}
+
+    def jac(t: float, x: np.ndarray, xp: np.ndarray, out: np.ndarray) -> None:
+        budget.check_clock(t)
+        counts["jac"] += 1
+        try:
+            j = system.partials(t, x)
+        except EvaluationFailed as exc:
+            if not exc.recoverable:
+                raise Stop(FMU_FAILED, f"{exc.call} returned {exc.status}", t, call=exc.call,
+                           status=exc.status, log=list(exc.log)[:5]) from None
+            j = last.get("jac", np.eye(nx))
+        if not np.all(np.isfinite(j)):
+            j = last.get("jac", np.eye(nx))
+        last["jac"] = j
+        out[:, :] = j
+
+    def record(k: int, t: float, x: np.ndarray) -> None:
+        nonlocal reached
+        values[k, :nx] = x
+        values[k, nx:] = system.algebraic_values(t, x)
+        reached = k + 1
+
+    stepper = None
+    try:
+        x0 = np.asarray(x0, dtype=float)
+        record(0, t0, x0)
+        solver = CVODE(rhs, jacfn=jac, method="BDF", rtol=settings.rtol, atol=atol,
+                       linsolver="dense")
+        solver.init_step(t0, x0)
+        stepper = Stepper(solver, times, stop, budget, record, x0)
+        stepper.run()
+        failure = stepper.failure
+        pending = [f for f in failures if f[0] > stepper.t]
+        if failure is None:
+            traj.status = OK
+        elif pending:
+            _, call, status = pending[-1]
+            traj.status = FMU_FAILED
+            traj.message = (f"{call} returned {status} at every step CVODE tried beyond "
+                            f"t = {stepper.t:.10g}; reducing the step did not help")
+            traj.event = {"t": stepper.t, "call": call, "status": status,
+                          "failed_evaluations": len(pending), "solver": failure.message}
+        else:
+            traj.status = SOLVER
+            traj.message = f"CVODE stopped at t = {stepper.t:.10g}: {failure.message}"
+            traj.event = {"t": stepper.t, "solver_status": int(failure.status),
+                          "solver": failure.message}
+    except Stop as stop_:
+        traj.status, traj.message = stop_.status, stop_.message
+        traj.event = {"t": stop_.t, **stop_.details}
+        if stepper is not None and stop_.status in (BUDGET, SOLVER):
+            traj.event.setdefault("last_step_t", stepper.t)
+            blame_failures(traj, failures, stop_, "CVODE")
+    except EvaluationFailed as exc:  # at the initial point
+        traj.status, traj.message = FMU_FAILED, str(exc)
+        traj.event = {"t": t0, "call": exc.call, "status": exc.status}
+    traj.times, traj.values = traj.times[:reached], values[:reached]
+    traj.steps = stepper.steps if stepper else 0
+    traj.t_end = stepper.t if stepper else t0
+    traj.function_calls, traj.jacobian_calls = counts["rhs"], counts["jac"]
+    traj.fmi_calls = system.fmi_calls - calls0
+    traj.wall_s = budget.elapsed()
+    traj.recovered = sum(1 for t, _, _ in failures if t <= traj.t_end)
+    return traj

@@ -1,0 +1,202 @@
+"""The FMU as the integrators see it: a DAE residual (DAE mode) or an ODE right-hand side.
+
+:class:`FmuDae` drives an instance in DAE mode in Continuous-Time Mode: it sets time, the states
+(fmi3SetContinuousStates) and the algebraic variables (fmi3SetFloat64), and reads the state
+derivatives (fmi3GetContinuousStateDerivatives) and the residuals (fmi3GetFloat64). Its partial
+derivatives ``d[f; g]/d[x; w]`` come from fmi3GetDirectionalDerivative, one call per group of
+columns that share no row in the *declared* sparsity (the manifest ``dependencies``; CPR
+colouring, ``conformance.probes.colouring``), which is what an importer does. Without directional
+derivatives, coloured forward differences of the same evaluations stand in.
+
+:class:`FmuOde` drives an instance in ODE mode: states in, derivatives out, the FMU solving its
+algebraic equations itself; the Jacobian ``df/dx`` is coloured by the modelDescription's
+ContinuousStateDerivative dependencies. The algebraic variables are read at the output times.
+
+A call that returns fmi3Discard, or non-finite values, is an
+:class:`~conformance.simulate.limits.EvaluationFailed` the integrator may recover from by a
+smaller step; fmi3Error and fmi3Fatal are not recoverable.
+"""
+from __future__ import annotations
+
+from typing import Iterable, Sequence
+
+import numpy as np
+
+from ..probes import colouring as col
+from ..probes import numdiff
+from ..probes.api import FmiError
+from .limits import EvaluationFailed
+
+DIRECTIONAL, FINITE_DIFFERENCES = "directional derivatives", "finite differences"
+
+
+def _failed(exc: FmiError) -> EvaluationFailed:
+    return EvaluationFailed(exc.call, exc.status, exc.log,
+                            recoverable=exc.status == "fmi3Discard")
+
+
+def pattern_from(unknowns: Iterable[object | None], columns: Sequence[int]) -> col.Pattern:
+    """The declared sparsity of ``unknowns`` (model Unknown records, None for a row that
+    lists nothing) over ``columns`` (value references): a row without a ``dependencies``
+    attribute depends on every column."""
+    index = {vr: j for j, vr in enumerate(columns)}
+    rows = []
+    for u in unknowns:
+        deps = getattr(u, "dependencies", None)
+        rows.append(range(len(columns)) if deps is None
+                    else [index[vr] for vr in deps if vr in index])
+    return col.Pattern.from_rows(len(columns), rows)
+
+
+class _Coloured:
+    """Partial derivatives of ``rows`` with respect to ``cols`` at the values already set."""
+
+    def __init__(self, inst, rows: list[int], cols: list[int], pattern: col.Pattern,
+                 nominal: np.ndarray, use_directional: bool):
+        self.inst, self.rows, self.cols, self.pattern = inst, rows, cols, pattern
+        self.nominal = nominal
+        self.colouring = col.colour_columns(pattern)
+        self.use_directional = use_directional
+        self.source = DIRECTIONAL if use_directional else FINITE_DIFFERENCES
+
+    def directional(self) -> np.ndarray:
+        jac = np.zeros(self.pattern.shape)
+        p = self.pattern
+        for g in range(self.colouring.count):
+            out = self.inst.directional_as_set(self.rows, self.cols, self.colouring.seed(g))
+            k = self.colouring.entries[g]
+            jac[p.rows[k], p.cols[k]] = out[p.rows[k]]
+        return jac
+
+    def differences(self, fun, y: np.ndarray, f0: np.ndarray) -> np.ndarray:
+        """Coloured forward differences (one evaluation per group; step sizes of numdiff)."""
+        steps = numdiff.step_sizes(y, self.nominal, method="forward")
+        jac = np.zeros(self.pattern.shape)
+        p = self.pattern
+        for g in range(self.colouring.count):
+            seed = self.colouring.seed(g, steps)
+            out = fun(y + seed)
+            k = self.colouring.entries[g]
+            h = steps[p.cols[k]]
+            jac[p.rows[k], p.cols[k]] = (out[p.rows[k]] - f0[p.rows[k]]) / np.where(h > 0, h, 1)
+        return jac
+
+
+class FmuDae:
+    """``F = [f; g]`` of an instance in DAE mode, with ``y = [x; w]`` (see dae.DaeSystem)."""
+
+    def __init__(self, inst, layout, manifest, *, use_directional: bool = True):
+        self.inst, self.layout = inst, layout
+        self.states, self.algebraic = list(layout.states), list(layout.algebraic)
+        self.derivatives, self.residuals = list(layout.derivatives), list(layout.residuals)
+        self.nx, self.nw = len(self.states), len(self.algebraic)
+        cols = [*self.states, *self.algebraic]
+        self.names = [layout.name(vr) for vr in cols]
+        self.nominal = np.array([layout.scale(vr) for vr in cols], dtype=float)
+        by_vr = {u.vr: u for kind in ("ContinuousStateDerivative", "Residual")
+                 for u in (manifest.unknowns(kind) if manifest is not None else ())}
+        pattern = pattern_from([by_vr.get(vr) for vr in (*self.derivatives, *self.residuals)],
+                               cols)
+        self.jac = _Coloured(inst, [*self.derivatives, *self.residuals], cols, pattern,
+                             self.nominal, use_directional and layout.provides_directional)
+        self.jacobian_source = self.jac.source
+        self._set_at: tuple[float, bytes] | None = None
+
+    @property
+    def fmi_calls(self) -> int:
+        return int(self.inst.calls)
+
+    def _set(self, t: float, y: np.ndarray) -> None:
+        key = (float(t), np.asarray(y, dtype=float).tobytes())
+        if key == self._set_at:
+            return
+        self._set_at = None
+        self.inst.set_time(t)
+        self.inst.set_states(y[:self.nx])
+        self.inst.set_float64(self.algebraic, y[self.nx:])
+        self._set_at = key
+
+    def evaluate(self, t: float, y: np.ndarray) -> np.ndarray:
+        try:
+            self._set(t, y)
+            der = self.inst.get_derivatives(self.nx)
+            res = self.inst.get_float64(self.residuals)
+        except FmiError as exc:
+            self._set_at = None
+            raise _failed(exc) from None
+        return np.concatenate([der, res])
+
+    def partials(self, t: float, y: np.ndarray) -> np.ndarray:
+        if not self.jac.use_directional:
+            return self.jac.differences(lambda v: self.evaluate(t, v), np.asarray(y, float),
+                                        self.evaluate(t, y))
+        try:
+            self._set(t, y)
+            return self.jac.directional()
+        except FmiError as exc:
+            self._set_at = None
+            raise _failed(exc) from None
+
+
+class FmuOde:
+    """``x' = f(t, x)`` of an instance in ODE mode (see ode.OdeSystem)."""
+
+    def __init__(self, inst, layout, model, *, use_directional: bool = True):
+        self.inst, self.layout = inst, layout
+        self.states, self.derivatives = list(layout.ode_states), list(layout.ode_derivatives)
+        self.algebraic = list(layout.algebraic)
+        self.nx = len(self.states)
+        self.names = [layout.name(vr) for vr in self.states]
+        self.algebraic_names = [layout.name(vr) for vr in self.algebraic]
+        self.nominal = np.array([layout.scale(vr) for vr in self.states], dtype=float)
+        by_vr = {u.vr: u for u in model.unknowns("ContinuousStateDerivative")}
+        pattern = pattern_from([by_vr.get(vr) for vr in self.derivatives], self.states)
+        self.jac = _Coloured(inst, self.derivatives, self.states, pattern, self.nominal,
+                             use_directional and layout.provides_directional)
+        self.jacobian_source = self.jac.source
+        self._set_at: tuple[float, bytes] | None = None
+        self._algebraic_readable = True
+
+    @property
+    def fmi_calls(self) -> int:
+        return int(self.inst.calls)
+
+    def _set(self, t: float, x: np.ndarray) -> None:
+        key = (float(t), np.asarray(x, dtype=float).tobytes())
+        if key == self._set_at:
+            return
+        self._set_at = None
+        self.inst.set_time(t)
+        self.inst.set_states(x)
+        self._set_at = key
+
+    def evaluate(self, t: float, x: np.ndarray) -> np.ndarray:
+        try:
+            self._set(t, x)
+            return self.inst.get_derivatives(self.nx)
+        except FmiError as exc:
+            self._set_at = None
+            raise _failed(exc) from None
+
+    def partials(self, t: float, x: np.ndarray) -> np.ndarray:
+        if not self.jac.use_directional:
+            return self.jac.differences(lambda v: self.evaluate(t, v), np.asarray(x, float),
+                                        self.evaluate(t, x))
+        try:
+            self._set(t, x)
+            return self.jac.directional()
+        except FmiError as exc:
+            self._set_at = None
+            raise _failed(exc) from None
+
+    def algebraic_values(self, t: float, x: np.ndarray) -> np.ndarray:
+        """The algebraic variables the FMU computes in ODE mode (NaN if not readable)."""
+        if not self.algebraic or not self._algebraic_readable:
+            return np.full(len(self.algebraic), np.nan)
+        try:
+            self._set(t, x)
+            return self.inst.get_float64(self.algebraic)
+        except FmiError:
+            self._set_at = None
+            self._algebraic_readable = False  # a local the FMU does not expose: stop asking
+            return np.full(len(self.algebraic), np.nan)

@@ -10,27 +10,32 @@ Two tables, side by side in one run, medians over ``--runs`` runs (calls do not 
    relative to the row scale S_i = sum_j |J_ij| nominal_j; and the findings the rules would
    report (all scenes are correct, so any is a false positive).
 2. **Scaling.** The Chain scene (tridiagonal dg/dw) with coloured against column-by-column
-   Jacobians, at one point: the C FMU (N = 100, 1000) and, because the test-scene framework
-   keeps dense (4N x 3N) work arrays and its derivative functions cost O(N^3) per call, a numpy
-   twin of the same equations through the same :func:`conformance.probes.colouring.measure`
-   for N = 1000 and 10000. Coloured needs the same number of calls for every N.
+   Jacobians, at one point, on the C FMU at N = 1000 and 10000 (``--chain-fmu-sizes``; the
+   framework works in O(nnz) for a model that declares its pattern). Coloured needs the same
+   number of calls for every N; column by column runs up to ``--full-by-column-up-to`` and is
+   marked, with an estimate from the largest N run, above it. ``--chain-twin-sizes`` adds a
+   numpy twin of the same equations through the same
+   :func:`conformance.probes.colouring.measure` (the checker's own cost, no FMI calls).
+3. **Calls.** The cost of one fmi3GetDirectionalDerivative / fmi3GetAdjointDerivative call of
+   the Chain FMU, through fmpy's ctypes with the arrays prepared: DAE mode with every residual,
+   derivative and output against every state, algebraic variable and input (the whole Jacobian
+   times a vector), and ODE mode (total derivatives through a solve with dg/dw).
 
-The C FMUs are loaded in process (our own scenes, no isolation needed), in a thread with a
-1 GiB stack for the framework's arrays. Writes ``probes.md``, ``probes.json`` and ``probes.png``
-into ``--out``.
+The C FMUs are loaded in process (our own scenes, no isolation needed). Writes ``probes.md``,
+``probes.json`` and ``probes.png`` into ``--out``.
 
     python -m bench.probe_bench [--out reports/bench] [--runs 5] [--quick]
 """
 from __future__ import annotations
 
 import argparse
+import ctypes
 import datetime as dt
 import json
 import shutil
 import statistics
 import sys
 import tempfile
-import threading
 import time
 import zipfile
 from dataclasses import dataclass
@@ -45,6 +50,7 @@ from conformance.manifest import MANIFEST, read_manifest
 from conformance.model import read_model_description
 from conformance.probes import colouring as col
 from conformance.probes import derivatives as D
+from conformance.probes import jacobian as J
 from conformance.probes import numdiff
 from conformance.probes.api import ProbeContext
 from tests.scenes.build import build_scene
@@ -83,7 +89,7 @@ class Fmu:
         shutil.rmtree(self.dir, ignore_errors=True)
 
 
-def scaled_errors(survey: D.Survey, ulps: float = numdiff.DEFAULT_ULPS) -> tuple[float, float]:
+def scaled_errors(survey: J.Survey, ulps: float = numdiff.DEFAULT_ULPS) -> tuple[float, float]:
     """Largest |fd - dd| and largest estimated error, both times nominal_j / S_i."""
     assert survey.layout is not None
     nominal = survey.layout.nominal
@@ -115,17 +121,17 @@ def bench_methods(runs: int, scenes: Sequence[str]) -> list[dict[str, Any]]:
         fmu = Fmu(chain.build_chain() if scene == "Chain" else build_scene(scene))
         try:
             for method in numdiff.METHODS:
-                settings = D.Settings(method=method)
+                settings = J.Settings(method=method)
                 before = fmu.dae.calls
 
-                def once(fmu: Fmu = fmu, settings: D.Settings = settings
-                         ) -> tuple[D.Survey, ProbeContext]:
+                def once(fmu: Fmu = fmu, settings: J.Settings = settings
+                         ) -> tuple[J.Survey, ProbeContext]:
                     ctx = fmu.context()
-                    return D._survey(ctx, settings), ctx
+                    return J.run_survey(ctx, settings), ctx
 
                 (survey, ctx), times = _timed(once, runs)
                 calls = (fmu.dae.calls - before) // runs
-                ctx.facts[D.FACT] = survey
+                ctx.facts[J.FACT] = survey
                 findings = sum(len(list(D.PROBES[code](ctx))) for code in RULES)
                 per = {k: sum(dict(p.entries.calls)[k] for p in survey.points)
                        for k in ("evaluate", "directional", "adjoint")}
@@ -181,14 +187,14 @@ class ChainTwin:
         return np.concatenate([[-vr[0] - vd], gw, [-vr[-1], 0.0]])
 
 
-def _chain_layout(n: int) -> D.JacobianLayout:
+def _chain_layout(n: int) -> J.JacobianLayout:
     model = read_model_description(etree.ElementTree(etree.fromstring(
         chain.model_description(n).encode())))
     manifest = read_manifest(etree.ElementTree(etree.fromstring(chain.manifest(n).encode())),
                              draft="alpha1")
     ctx = ProbeContext(model, manifest, "alpha1", 0, np.random.default_rng(0), [], None, None,
                        lambda mode: None, {})
-    layout, reason = D.build_layout(ctx)
+    layout, reason = J.build_layout(ctx)
     assert layout is not None, reason
     return layout
 
@@ -220,11 +226,11 @@ def _twin_case(n: int, coloured: bool, runs: int) -> dict[str, Any]:
 
 
 def _fmu_case(fmu: Fmu, n: int, coloured: bool, derivatives: bool, runs: int) -> dict[str, Any]:
-    settings = D.Settings(coloured=coloured, use_derivatives=derivatives)
+    settings = J.Settings(coloured=coloured, use_derivatives=derivatives)
     before = fmu.dae.calls
 
-    def once() -> D.Survey:
-        return D._survey(fmu.context(points=1), settings)
+    def once() -> J.Survey:
+        return J.run_survey(fmu.context(points=1), settings)
 
     survey, times = _timed(once, runs)
     entries = survey.points[0].entries
@@ -240,23 +246,93 @@ def _fmu_case(fmu: Fmu, n: int, coloured: bool, derivatives: bool, runs: int) ->
     return out
 
 
+def _not_run(n: int, derivatives: bool, measured: dict[str, Any] | None) -> dict[str, Any]:
+    """A column-by-column row above --full-by-column-up-to: calls as the colouring gives them
+    (one group per column), time estimated as O(N^2) from the largest N measured."""
+    row = {"backend": "C FMU", "n": n, "jacobian": "by column",
+           "derivatives": "fd+dd+adjoint" if derivatives else "fd only", "groups": n + 3,
+           "evaluate": None, "directional": None, "adjoint": None, "seconds": None,
+           "max_error": None, "not_run": True, "estimate_seconds": None}
+    if measured is not None:
+        scale = (n / measured["n"]) ** 2
+        row.update(evaluate=measured["evaluate"] - 4 * measured["groups"] + 4 * (n + 3),
+                   estimate_seconds=measured["seconds"] * scale)
+        if derivatives:
+            row.update(directional=measured["directional"] - measured["groups"] + n + 3,
+                       adjoint=measured["adjoint"] - measured["groups"] + n + 3)
+    return row
+
+
 def bench_scaling(runs: int, fmu_sizes: Sequence[int], twin_sizes: Sequence[int],
                   full_by_column_up_to: int) -> list[dict[str, Any]]:
     rows = []
+    largest: dict[bool, dict[str, Any]] = {}
     for n in fmu_sizes:
         fmu = Fmu(chain.build_chain(n))
         try:
             for derivatives in (True, False):
                 for coloured in (True, False):
-                    if derivatives and not coloured and n > full_by_column_up_to:
-                        continue  # ~1 s per framework derivative call at N = 1000
-                    rows.append(_fmu_case(fmu, n, coloured, derivatives,
-                                          runs if coloured or n <= 100 else max(1, runs // 3)))
+                    if not coloured and n > full_by_column_up_to:
+                        rows.append(_not_run(n, derivatives, largest.get(derivatives)))
+                        continue
+                    row = _fmu_case(fmu, n, coloured, derivatives,
+                                    runs if coloured or n <= 100 else max(1, runs // 3))
+                    if not coloured:
+                        largest[derivatives] = row
+                    rows.append(row)
         finally:
             fmu.close()
     for n in twin_sizes:
         for coloured in (True, False):
             rows.append(_twin_case(n, coloured, runs))
+    return rows
+
+
+# ------------------------------------------------------------------------------ one call
+
+def _call_case(fmu: Fmu, n: int, mode: str, repeats: int) -> list[dict[str, Any]]:
+    """Seconds per fmi3GetDirectionalDerivative / fmi3GetAdjointDerivative call (median of
+    ``repeats`` batches of 20 calls), arrays prepared beforehand."""
+    from conformance.probes.session import start_instance
+
+    inst = start_instance(fmu.library, mode)
+    try:
+        if mode == "dae":
+            unknowns = [chain.vr_r(i) for i in range(n)] + [3, 5]
+            knowns = [2, *(chain.vr_w(i) for i in range(n)), 4]
+        else:
+            unknowns, knowns = [3, 5], [2, 4]
+        rng = np.random.default_rng(0)
+        u_vrs = (ctypes.c_uint32 * len(unknowns))(*unknowns)
+        k_vrs = (ctypes.c_uint32 * len(knowns))(*knowns)
+        rows = []
+        for fname, n_in, n_out in (("fmi3GetDirectionalDerivative", len(knowns), len(unknowns)),
+                                   ("fmi3GetAdjointDerivative", len(unknowns), len(knowns))):
+            seed = (ctypes.c_double * n_in)(*rng.normal(size=n_in))
+            out = (ctypes.c_double * n_out)()
+
+            args = (u_vrs, len(unknowns), k_vrs, len(knowns), seed, n_in, out, n_out)
+            _, times = _timed(lambda fname=fname, args=args: [inst._fmi(fname, *args)
+                                                             for _ in range(20)], repeats)
+            seconds = statistics.median(times) / 20
+            nnz = 3 * n + 3
+            rows.append({"n": n, "mode": mode, "call": fname, "unknowns": len(unknowns),
+                         "knowns": len(knowns), "nnz": nnz, "seconds": seconds,
+                         "ns_per_nonzero": 1e9 * seconds / nnz})
+        return rows
+    finally:
+        inst.free()
+
+
+def bench_calls(runs: int, sizes: Sequence[int]) -> list[dict[str, Any]]:
+    rows = []
+    for n in sizes:
+        fmu = Fmu(chain.build_chain(n))
+        try:
+            for mode in ("dae", "ode"):
+                rows.extend(_call_case(fmu, n, mode, max(runs, 3)))
+        finally:
+            fmu.close()
     return rows
 
 
@@ -266,15 +342,34 @@ def _fmt(value: Any, spec: str = ".2g") -> str:
     return "–" if value is None else format(value, spec)
 
 
+def _count(value: Any, not_run: bool) -> str:
+    return "–" if value is None else f"{value} (counted)" if not_run else str(value)
+
+
+def _scaling_line(r: dict[str, Any]) -> str:
+    not_run = bool(r.get("not_run"))
+    if not not_run:
+        seconds = f"{r['seconds']:.3g}"
+    elif r.get("estimate_seconds") is not None:
+        seconds = f"not run (≈ {r['estimate_seconds']:.0f} estimated)"
+    else:
+        seconds = "not run"
+    return (f"| {r['backend']} | {r['n']} | {r['jacobian']} | {r['derivatives']} | "
+            f"{r['groups']} | {_count(r['evaluate'], not_run)} | "
+            f"{_count(r['directional'], not_run)} | {_count(r['adjoint'], not_run)} | "
+            f"{seconds} | {_fmt(r['max_error'])} |")
+
+
 def render_markdown(data: dict[str, Any]) -> str:
     mach = data["machine"]
+    command = data.get("command", "python -m bench.probe_bench --out reports/bench")
     lines = [
         "# Probe benchmark: derivative check, calls and time against error",
         "",
         f"Run {data['date']} on {mach['cpu']} ({mach['usable_cores']} usable cores), "
         f"{mach['platform']}, Python {mach['python']}, numpy {data['numpy']}, "
         f"fmpy {mach['fmpy']}. Medians of {data['runs']} runs; calls do not vary between runs.",
-        "`python -m bench.probe_bench --out reports/bench`.",
+        f"`{command}`.",
         "",
         "## 1. Finite-difference methods, per scene",
         "",
@@ -298,25 +393,42 @@ def render_markdown(data: dict[str, Any]) -> str:
         "",
         "## 2. Chain: coloured against column-by-column Jacobians",
         "",
-        "One point. *groups*: perturbations per Jacobian (Curtis–Powell–Reid from the declared "
-        "sparsity, or one per column). Evaluations include the base point and the two random "
-        "verification directions; directional/adjoint include the verification and "
-        "dot-product calls. A derivative call of the test-scene framework costs O(N³) (its "
-        "value-reference lookup sits inside the unknowns × knowns loop; compare the coloured "
-        "C FMU rows at N = 1000 with and without derivatives), so column-by-column "
-        "directional derivatives run on the C FMU only up to N = 100; the numpy twin runs the "
-        "same `colouring.measure` on the same equations at 1k and 10k, and the framework's "
-        "dense work arrays (4N × 3N doubles on the stack) rule out a 10k C FMU.",
+        "One point, DAE mode, the C FMU (it declares its Jacobian's pattern, so the framework's "
+        "derivative calls cost O(N); see section 3). *groups*: perturbations per Jacobian "
+        "(Curtis–Powell–Reid from the declared sparsity, or one per column). Evaluations "
+        "include the base point and the two random verification directions; directional/"
+        "adjoint include the verification and dot-product calls. Coloured needs the same calls "
+        "for every N; column by column costs O(N) calls of O(N) each"
+        + (": rows marked *not run* have their calls counted from the colouring and their "
+           "time extrapolated as N² from the largest N measured" if any(
+               r.get("not_run") for r in data["scaling"]) else "")
+        + ". Most of the time per call is the checker's side (setting N algebraic variables "
+        "and reading N + 2 unknowns through ctypes at every evaluation), not the FMU's.",
         "",
         "| backend | N | Jacobian | derivatives | groups | evaluations | directional | adjoint |"
         " time (s) | measured error |",
         "|---|---|---|---|---|---|---|---|---|---|",
     ]
-    for r in data["scaling"]:
-        lines.append(
-            f"| {r['backend']} | {r['n']} | {r['jacobian']} | {r['derivatives']} | "
-            f"{r['groups']} | {r['evaluate']} | {r['directional']} | {r['adjoint']} | "
-            f"{r['seconds']:.3g} | {_fmt(r['max_error'])} |")
+    lines += [_scaling_line(r) for r in data["scaling"]]
+    if data.get("calls"):
+        lines += [
+            "",
+            "## 3. Chain: one derivative call of the C FMU",
+            "",
+            "Through fmpy's ctypes with the arrays prepared (no conversions in Python), median "
+            "of batches of 20 calls. DAE mode: every residual, derivative and output against "
+            "every state, algebraic variable and input (the whole Jacobian, 3N + 3 nonzeros, "
+            "times a vector). ODE mode: der(x) and y against x and u, total derivatives through "
+            "one band-LU solve with dg/dw.",
+            "",
+            "| N | mode | call | unknowns × knowns | time per call (µs) | ns per nonzero |",
+            "|---|---|---|---|---|---|",
+        ]
+        for r in data["calls"]:
+            lines.append(
+                f"| {r['n']} | {r['mode'].upper()} | {r['call'].removeprefix('fmi3Get')} | "
+                f"{r['unknowns']} × {r['knowns']} | {1e6 * r['seconds']:.1f} | "
+                f"{r['ns_per_nonzero']:.1f} |")
     lines += ["", "![calls against error and size](probes.png)", ""]
     return "\n".join(lines)
 
@@ -350,29 +462,40 @@ def plot(data: dict[str, Any], path: Path) -> None:
                                         ("numpy twin", "coloured", "fd+dd+adjoint"): "^-",
                                         ("numpy twin", "by column", "fd+dd+adjoint"): "^--"
                                         }.items():
-        pts = sorted((r["n"], r["evaluate"] + r["directional"] + r["adjoint"])
-                     for r in data["scaling"] if (r["backend"], r["jacobian"], r["derivatives"])
-                     == (backend, jac, ders))
-        if pts:
-            right.loglog(*zip(*pts), style, label=f"{backend}, {jac}, {ders}")
+        rows = sorted((r for r in data["scaling"] if r["evaluate"] is not None and
+                       (r["backend"], r["jacobian"], r["derivatives"]) == (backend, jac, ders)),
+                      key=lambda r: r["n"])
+        if not rows:
+            continue
+        calls = [r["evaluate"] + (r["directional"] or 0) + (r["adjoint"] or 0) for r in rows]
+        line, = right.loglog([r["n"] for r in rows], calls, style,
+                             label=f"{backend}, {jac}, {ders}")
+        counted = [(r["n"], c) for r, c in zip(rows, calls) if r.get("not_run")]
+        if counted:  # calls counted from the colouring, not run: open markers
+            right.loglog(*zip(*counted), style[0], color=line.get_color(), markersize=11,
+                         fillstyle="none")
     right.set_xlabel("N (algebraic variables)")
     right.set_ylabel("calls per point (evaluate + directional + adjoint)")
-    right.set_title("Chain: coloured against column by column")
+    right.set_title("Chain: coloured against column by column" + (
+        "\n(open markers: calls counted, not run)" if any(
+            r.get("not_run") for r in data["scaling"]) else ""))
     right.legend(fontsize=8)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
 
 
-def run(args: argparse.Namespace) -> dict[str, Any]:
+def run(args: argparse.Namespace, command: str = "") -> dict[str, Any]:
     scenes = SCENES if not args.quick else ("HelloWorldDAE", "Chain")
     fmu_sizes = [int(s) for s in args.chain_fmu_sizes.split(",") if s]
     twin_sizes = [int(s) for s in args.chain_twin_sizes.split(",") if s]
     return {
         "date": dt.datetime.now(dt.timezone.utc).isoformat(timespec="seconds"),
         "machine": machine_info(), "numpy": np.__version__, "runs": args.runs,
+        "command": command or "python -m bench.probe_bench",
         "methods": bench_methods(args.runs, scenes),
         "scaling": bench_scaling(args.runs, fmu_sizes, twin_sizes, args.full_by_column_up_to),
+        "calls": bench_calls(args.runs, fmu_sizes),
     }
 
 
@@ -381,24 +504,16 @@ def main(argv: Sequence[str] | None = None) -> int:
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--out", type=Path, default=Path("reports/bench"))
     parser.add_argument("--runs", type=int, default=5)
-    parser.add_argument("--chain-fmu-sizes", default="100,1000")
-    parser.add_argument("--chain-twin-sizes", default="1000,10000")
-    parser.add_argument("--full-by-column-up-to", type=int, default=100,
-                        help="largest N of the C FMU with column-by-column derivatives")
+    parser.add_argument("--chain-fmu-sizes", default="1000,10000")
+    parser.add_argument("--chain-twin-sizes", default="",
+                        help="N of the numpy twin rows (none by default)")
+    parser.add_argument("--full-by-column-up-to", type=int, default=1000,
+                        help="largest N of the C FMU run column by column (above: counted)")
     parser.add_argument("--quick", action="store_true", help="two scenes (for the tests)")
     args = parser.parse_args(argv)
-    result: dict[str, Any] = {}
-
-    def work() -> None:
-        result.update(run(args))
-
-    threading.stack_size(1 << 30)  # the framework's dense work arrays at N = 1000
-    thread = threading.Thread(target=work, name="probe-bench")
-    thread.start()
-    thread.join()
-    if not result:
-        print("probe benchmark failed (see the traceback above)", file=sys.stderr)
-        return 2
+    command = " ".join(["python -m bench.probe_bench",
+                        *(sys.argv[1:] if argv is None else list(argv))])
+    result = run(args, command)
     args.out.mkdir(parents=True, exist_ok=True)
     (args.out / "probes.json").write_text(json.dumps(result, indent=2) + "\n")
     (args.out / "probes.md").write_text(render_markdown(result))

@@ -1,5 +1,5 @@
-"""The basic probes: the enable handshake, setting algebraic variables, consistency at the start,
-repeatability, non-finite values and failing evaluations.
+"""The basic probes: setting algebraic variables, consistency at the start, repeatability,
+non-finite values and failing evaluations (the enable handshake is in handshake.py).
 
 Each probe runs in the worker process on a :class:`~conformance.probes.api.ProbeContext` whose
 ``facts`` hold the :class:`~conformance.probes.sampling.Layout` (``"layout"``) and the loaded
@@ -10,252 +10,32 @@ fault reports it; non-finite values are left to ``nan-or-inf``.
 """
 from __future__ import annotations
 
-import contextlib
 import math
-from typing import Any, Iterator, Sequence
+from typing import Any, Iterator
 
 import numpy as np
 
 from ..findings import Location, Violation, evidence
-from ..model import MODEL_DESCRIPTION
-from .api import FmiError, Point, ProbeContext, ProbeSkipped
+from .api import FmiError, Point, ProbeContext
+from .common import (
+    close,
+    dae_of,
+    error_evidence,
+    finite,
+    fresh_instance,
+    layout_of,
+    manifest_location,
+    root_location,
+    unknown_location,
+    unknowns_of,
+    var_location,
+)
 from .sampling import Layout, _within
-from .session import INIT_CALLS, Instance, Library, PointNotSet, configure, reconfigure
+from .session import Instance, PointNotSet
 
-# --------------------------------------------------------------------------------- helpers
-
-
-def _layout(ctx: ProbeContext) -> Layout:
-    return ctx.facts["layout"]  # type: ignore[return-value]
-
-
-def _dae(ctx: ProbeContext) -> Instance:
-    """The DAE-mode evaluator, or ProbeSkipped saying why there is none."""
-    if ctx.dae is None:
-        error = ctx.facts.get("dae_error")
-        raise ProbeSkipped(f"DAE mode could not be started: {error}" if error else
-                           "DAE mode could not be started")
-    return ctx.dae  # type: ignore[return-value]
-
-
-def _var_location(ctx: ProbeContext, vr: int) -> Location:
-    var = ctx.model.by_vr.get(vr)
-    if var is None:
-        return Location(file=MODEL_DESCRIPTION)
-    return Location(file=ctx.model.file, line=var.line, path=var.path)
-
-
-def _manifest_location(ctx: ProbeContext, vr: int | None, kinds: Sequence[str]) -> Location:
-    """The manifest element of kind ``kinds`` (AlgebraicVariable, Residual, ...) for ``vr``."""
-    m = ctx.manifest
-    if m is None:
-        return Location()
-    if "AlgebraicVariable" in kinds:
-        for ref in m.algebraic:
-            if ref.vr == vr:
-                return Location(file=m.file, line=ref.line, path=ref.path)
-    if "Enable" in kinds and m.enables:
-        ref = m.enables[0]
-        return Location(file=m.file, line=ref.line, path=ref.path)
-    for u in m.structure:
-        if u.kind in kinds and u.vr == vr:
-            return Location(file=m.file, line=u.line, path=u.path)
-    return _var_location(ctx, vr) if vr is not None else Location(file=m.file, line=m.root_line)
-
-
-def _root_location(ctx: ProbeContext) -> Location:
-    m = ctx.manifest
-    return Location(file=m.file, line=m.root_line) if m else Location(file=MODEL_DESCRIPTION)
-
-
-def _unknown_location(ctx: ProbeContext, vr: int) -> Location:
-    loc = _manifest_location(ctx, vr, ("Residual", "ContinuousStateDerivative", "Output"))
-    return loc if loc.line is not None else _var_location(ctx, vr)
-
-
-def _unknowns(layout: Layout, mode: str = "dae") -> list[int]:
-    """Residuals (DAE mode), derivatives and outputs, each once."""
-    vrs = [*(layout.residuals if mode == "dae" else ()), *layout.derivatives_for(mode),
-           *layout.outputs_for(mode)]
-    return list(dict.fromkeys(vrs))
-
-
-def _error_evidence(exc: FmiError) -> dict[str, Any]:
-    return {"call": exc.call, "status": exc.status, "log": list(exc.log[:10])}
-
-
-def _close(a: float, b: float, *, rtol: float, atol: float, scale: float) -> bool:
-    return abs(a - b) <= atol + rtol * max(scale, abs(a), abs(b))
-
-
-def _finite(values: Any) -> bool:
-    return bool(np.all(np.isfinite(values)))
-
-
-def _new_instance(library: Library, label: str) -> Instance:
-    return Instance(library, name=library.next_name(label))
-
-
-@contextlib.contextmanager
-def _fresh(ctx: ProbeContext, mode: str) -> Iterator[Instance]:
-    """A new instance in Continuous-Time Mode in ``mode``, freed afterwards."""
-    inst = ctx.new_instance(mode)
-    try:
-        yield inst  # type: ignore[misc]
-    finally:
-        inst.free()  # type: ignore[attr-defined]
-
-
-# -------------------------------------------------------------------------- enable-handshake
-
-
-class _Steps:
-    """Runs the calls of a handshake one by one and remembers how far it got."""
-
-    def __init__(self) -> None:
-        self.done: list[str] = []
-
-    def __call__(self, label: str, fn: Any, *args: Any) -> Any:
-        result = fn(*args)
-        self.done.append(label)
-        return result
-
-
-def enable_handshake(ctx: ProbeContext) -> Iterator[Violation]:
-    """DAE-12, DAE-13, DAE-11: switch DAE mode on in Configuration Mode (and, for a tunable
-    switch, off and on again in Reconfiguration Mode); with the switch false, run as an ODE FMU.
-
-    An fmi3Error from fmi3Enter/ExitInitializationMode in DAE mode is not reported here: alpha.1
-    allows it (DAE-14), and ``dae-initialization-refused`` reports it as information.
-    """
-    layout = _layout(ctx)
-    library: Library = ctx.facts["library"]  # type: ignore[assignment]
-    if layout.enable_status == "unusable":
-        raise ProbeSkipped("the enable parameter cannot be used (see the static findings)")
-    where = _manifest_location(ctx, layout.enable, ("Enable",))
-    subject = layout.name(layout.enable) if layout.enable is not None else None
-    yield from _dae_handshake(ctx, layout, library, where, subject)
-    if layout.enable is not None:
-        yield from _ode_handshake(ctx, layout, library, where, subject)
-
-
-def _dae_handshake(ctx: ProbeContext, layout: Layout, library: Library, where: Location,
-                   subject: str | None) -> Iterator[Violation]:
-    steps = _Steps()
-    vr = layout.enable
-    inst = None
-    try:
-        inst = steps("fmi3InstantiateModelExchange", _new_instance, library, "handshake-dae")
-        if vr is not None:
-            steps("fmi3EnterConfigurationMode", inst.enter_configuration_mode)
-            steps("fmi3SetBoolean(true)", inst.set_boolean, vr, True)
-            steps("fmi3ExitConfigurationMode", inst.exit_configuration_mode)
-        try:
-            steps("fmi3EnterInitializationMode", inst.enter_initialization_mode,
-                  layout.start_time)
-            if vr is not None and not steps("fmi3GetBoolean", inst.get_boolean, vr):
-                yield Violation(
-                    "the enable parameter {subject} reads back false in Initialization Mode "
-                    "after fmi3SetBoolean(true) in Configuration Mode", where,
-                    evidence(sequence=steps.done, expected=True, actual=False), subject)
-                return
-            steps("fmi3ExitInitializationMode", inst.exit_initialization_mode)
-        except FmiError as exc:
-            if exc.call in INIT_CALLS:
-                return  # DAE-14: allowed under alpha.1, reported by dae-initialization-refused
-            raise
-        steps("fmi3UpdateDiscreteStates", inst.update_discrete_states)
-        if vr is not None and layout.enable_tunable:
-            yield from _reconfigure(inst, vr, steps, where, subject)
-        steps("fmi3EnterContinuousTimeMode", inst.enter_continuous_time_mode)
-        steps("fmi3GetContinuousStateDerivatives", inst.get_derivatives,
-              len(layout.states))
-    except FmiError as exc:
-        yield Violation(
-            f"switching DAE mode on fails: {exc.call} returned {exc.status} after "
-            f"{' -> '.join(steps.done) or 'nothing'}", where,
-            evidence(_error_evidence(exc), sequence=steps.done, mode="dae"), subject)
-    finally:
-        if inst is not None:
-            inst.free()
-
-
-def _reconfigure(inst: Instance, vr: int, steps: _Steps, where: Location,
-                 subject: str | None) -> Iterator[Violation]:
-    """DAE-13: Event Mode -> Reconfiguration Mode, switch off and on again, read back."""
-    for value in (False, True):
-        steps(f"fmi3EnterConfigurationMode (Reconfiguration, set {str(value).lower()})",
-              reconfigure, inst, value)
-        if steps("fmi3GetBoolean", inst.get_boolean, vr) != value:
-            yield Violation(
-                "the tunable enable parameter {subject} does not read back "
-                f"{str(value).lower()} after it was set in Reconfiguration Mode", where,
-                evidence(sequence=steps.done, expected=value, actual=not value), subject)
-
-
-def _ode_handshake(ctx: ProbeContext, layout: Layout, library: Library, where: Location,
-                   subject: str | None) -> Iterator[Violation]:
-    """DAE-11: with the switch false (its start value), an ordinary Model Exchange FMU."""
-    steps = _Steps()
-    inst = None
-    point = None
-    try:
-        inst = steps("fmi3InstantiateModelExchange", _new_instance, library, "handshake-ode")
-        steps("fmi3EnterInitializationMode", inst.enter_initialization_mode, layout.start_time)
-        if steps("fmi3GetBoolean", inst.get_boolean, layout.enable):
-            yield Violation(
-                "the enable parameter {subject} reads true after instantiation: an FMU must "
-                "start in ODE mode", where, evidence(sequence=steps.done, expected=False,
-                                                     actual=True), subject)
-        steps("fmi3ExitInitializationMode", inst.exit_initialization_mode)
-        steps("fmi3UpdateDiscreteStates", inst.update_discrete_states)
-        steps("fmi3EnterContinuousTimeMode", inst.enter_continuous_time_mode)
-        for point in ctx.points:
-            inst.set_point(point)
-            steps(f"fmi3GetContinuousStateDerivatives at {point.label}", inst.get_derivatives,
-                  len(layout.ode_states))
-    except FmiError as exc:
-        at = f" at point {point.label}" if point is not None else ""
-        yield Violation(
-            f"with the enable parameter false the FMU does not run as an ordinary ODE FMU: "
-            f"{exc.call} returned {exc.status}{at}", where,
-            evidence(_error_evidence(exc), sequence=steps.done, mode="ode",
-                     point=point.label if point else None), subject)
-    finally:
-        if inst is not None:
-            inst.free()
-
-
-# ---------------------------------------------------------------- dae-initialization-refused
-
-
-def dae_initialization_refused(ctx: ProbeContext) -> Iterator[Violation]:
-    """DAE-14: fmi3Enter/ExitInitializationMode returns an error in DAE mode (information)."""
-    layout = _layout(ctx)
-    library: Library = ctx.facts["library"]  # type: ignore[assignment]
-    if layout.enable_status == "unusable":
-        raise ProbeSkipped("the enable parameter cannot be used (see the static findings)")
-    inst = _new_instance(library, "init-dae")
-    try:
-        if layout.enable is not None:
-            configure(inst, True)
-        inst.enter_initialization_mode(layout.start_time)
-        inst.exit_initialization_mode()
-    except FmiError as exc:
-        if exc.call not in INIT_CALLS:
-            return  # a failing switch is enable-handshake's finding
-        switched = ctx.dae is not None and getattr(ctx.dae, "started", "") == "runtime-switch"
-        then = ("the probes switch DAE mode on at runtime, from Event Mode" if switched else
-                "DAE mode cannot be probed")
-        yield Violation(
-            f"the FMU refuses to initialise in DAE mode: {exc.call} returned {exc.status}; "
-            f"alpha.1 allows this (DAE-14), {then}",
-            _manifest_location(ctx, layout.enable, ("Enable",)),
-            evidence(_error_evidence(exc), dae_mode_probed="runtime-switch" if switched
-                     else None), subject=exc.call)
-    finally:
-        inst.free()
-
+# The helpers moved to common.py; these names stay for modules that imported them from here
+# (conformance/probes/simulation.py) until they import from .common.
+_layout, _manifest_location, _root_location = layout_of, manifest_location, root_location
 
 # ------------------------------------------------------------------- algebraic-not-settable
 
@@ -267,8 +47,8 @@ def algebraic_not_settable(ctx: ProbeContext, *, step: float = 0.1, rtol: float 
     back the value set, and the residuals or derivatives change with it. Each variable costs
     two evaluations of every residual and derivative, so a large FMU is checked on a seeded
     sample of ``max_variables`` of them (all of them are set once at the start point)."""
-    dae = _dae(ctx)
-    layout = _layout(ctx)
+    dae = dae_of(ctx)
+    layout = layout_of(ctx)
     start = ctx.points[0]
     dae.set_point(start, algebraic=False)
     rejected = False
@@ -280,9 +60,9 @@ def algebraic_not_settable(ctx: ProbeContext, *, step: float = 0.1, rtol: float 
             rejected = True
             yield Violation(
                 f"fmi3SetFloat64 on the algebraic variable {{subject}} returns {exc.status} in "
-                "Continuous-Time Mode, DAE mode", _manifest_location(ctx, vr,
+                "Continuous-Time Mode, DAE mode", manifest_location(ctx, vr,
                                                                     ("AlgebraicVariable",)),
-                evidence(_error_evidence(exc), point=start.label, value=value),
+                evidence(error_evidence(exc), point=start.label, value=value),
                 layout.name(vr))
     if rejected:
         return
@@ -300,7 +80,7 @@ def algebraic_not_settable(ctx: ProbeContext, *, step: float = 0.1, rtol: float 
 def _set_one(ctx: ProbeContext, dae: Instance, layout: Layout, start: Point, vr: int,
              watch: list[int], base: np.ndarray, *, step: float, rtol: float,
              react_rtol: float) -> Iterator[Violation]:
-    where = _manifest_location(ctx, vr, ("AlgebraicVariable",))
+    where = manifest_location(ctx, vr, ("AlgebraicVariable",))
     name = layout.name(vr)
     v0 = start.values.get(vr, layout.start.get(vr, 0.0))
     delta = step * max(layout.scale(vr), abs(v0))
@@ -311,7 +91,7 @@ def _set_one(ctx: ProbeContext, dae: Instance, layout: Layout, start: Point, vr:
         dae.set_point(start)
         dae.set_float64([vr], [value])
         got = float(dae.get_float64([vr])[0])
-        if not _close(got, value, rtol=rtol, atol=0.0, scale=layout.scale(vr)):
+        if not close(got, value, rtol=rtol, atol=0.0, scale=layout.scale(vr)):
             yield Violation(
                 "the algebraic variable {subject} does not keep the value set in DAE mode: "
                 "the FMU overwrites it", where,
@@ -323,7 +103,7 @@ def _set_one(ctx: ProbeContext, dae: Instance, layout: Layout, start: Point, vr:
         change = np.abs(after - base)
         if np.any(change > react_rtol * np.maximum(scales, np.abs(base))):
             return
-        if not _finite(after) or not _finite(base):
+        if not finite(after) or not finite(base):
             return  # nan-or-inf owns non-finite values
     if _declared_anywhere(ctx, vr):
         yield Violation(
@@ -352,11 +132,11 @@ def initial_residual_nonzero(ctx: ProbeContext, *, rtol: float = 1e-6, atol: flo
                              ) -> Iterator[Violation]:
     """After initialisation in DAE mode, on a fresh instance, every residual is zero within
     ``atol + rtol * nominal`` (the residual's own nominal, 1 when it declares none)."""
-    layout = _layout(ctx)
+    layout = layout_of(ctx)
     if not layout.residuals:
         return
-    _dae(ctx)
-    with _fresh(ctx, "dae") as inst:
+    dae_of(ctx)
+    with fresh_instance(ctx, "dae") as inst:
         values = inst.get_float64(list(layout.residuals))
         started = inst.started
     for vr, r in zip(layout.residuals, values):
@@ -371,7 +151,7 @@ def initial_residual_nonzero(ctx: ProbeContext, *, rtol: float = 1e-6, atol: flo
             yield Violation(
                 f"the residual {{subject}} is {r:.6g} after initialisation in DAE mode, not "
                 f"zero (tolerance {tol:.3g}): the FMU's initial point is not consistent",
-                _manifest_location(ctx, vr, ("Residual",)),
+                manifest_location(ctx, vr, ("Residual",)),
                 evidence(point="start", value=float(r), scale=scale, scale_source=source,
                          tolerance=tol, rtol=rtol, atol=atol, started=started),
                 layout.name(vr))
@@ -384,9 +164,9 @@ def evaluation_not_repeatable(ctx: ProbeContext, *, rtol: float = 1e-10, atol: f
                               ) -> Iterator[Violation]:
     """The same (t, x, w, u) gives the same residuals, derivatives and outputs whatever was
     evaluated before: points A, B, C evaluated as A B A A C B A, and A, B on a fresh instance."""
-    dae = _dae(ctx)
-    layout = _layout(ctx)
-    unknowns = _unknowns(layout)
+    dae = dae_of(ctx)
+    layout = layout_of(ctx)
+    unknowns = unknowns_of(layout)
     points = list(ctx.points)
     if not unknowns or len(points) < 2:
         return
@@ -402,7 +182,7 @@ def evaluation_not_repeatable(ctx: ProbeContext, *, rtol: float = 1e-10, atol: f
                             rtol=rtol, atol=atol, sequence=sequence)
         first.setdefault(point.label, (values, previous))
         previous = point.label
-    with _fresh(ctx, "dae") as fresh:
+    with fresh_instance(ctx, "dae") as fresh:
         for point in (b, a):
             values = fresh.evaluate(point, unknowns)
             yield from _compare(ctx, layout, unknowns, first, point, values,
@@ -421,12 +201,12 @@ def _compare(ctx: ProbeContext, layout: Layout, unknowns: list[int],
         x, y = float(ref[i]), float(values[i])
         if vr in reported or not (math.isfinite(x) and math.isfinite(y)):
             continue
-        if not _close(x, y, rtol=rtol, atol=atol, scale=layout.scale(vr)):
+        if not close(x, y, rtol=rtol, atol=atol, scale=layout.scale(vr)):
             reported.add(vr)
             yield Violation(
                 f"{{subject}} takes different values at the same point {point.label}: "
                 f"{x:.17g} (after {ref_previous}) and {y:.17g} (after {previous}); the FMU "
-                "keeps hidden state between evaluations", _unknown_location(ctx, vr),
+                "keeps hidden state between evaluations", unknown_location(ctx, vr),
                 evidence(point=point.label, first=x, second=y, difference=abs(x - y),
                          tolerance=atol + rtol * max(layout.scale(vr), abs(x), abs(y)),
                          rtol=rtol, atol=atol, sequence=list(sequence)),
@@ -441,18 +221,18 @@ def nan_or_inf(ctx: ProbeContext, *, directional: bool = True) -> Iterator[Viola
     variables in DAE mode; derivatives, outputs and algebraic variables in ODE mode; and, when
     the FMU provides directional derivatives, J @ 1 in DAE mode (every known at once, so a
     single non-finite partial shows)."""
-    layout = _layout(ctx)
+    layout = layout_of(ctx)
     if ctx.dae is None and ctx.ode is None:
-        _dae(ctx)
+        dae_of(ctx)
     found: dict[str, dict[str, Any]] = {}
     initial = Point(0.0, {}, "start (as initialised)")
     for vr, v in dict(ctx.facts.get("start_nonfinite") or {}).items():  # see start_point
-        _note(found, layout.name(vr), _var_location(ctx, vr),
+        _note(found, layout.name(vr), var_location(ctx, vr),
               "dae" if ctx.dae is not None else "ode", initial, v)
     for mode, inst in (("dae", ctx.dae), ("ode", ctx.ode)):
         if inst is None:
             continue
-        unknowns = list(dict.fromkeys([*_unknowns(layout, mode), *layout.algebraic]))
+        unknowns = list(dict.fromkeys([*unknowns_of(layout, mode), *layout.algebraic]))
         for point in ctx.points:
             try:
                 values = inst.evaluate(point, unknowns)
@@ -460,7 +240,7 @@ def nan_or_inf(ctx: ProbeContext, *, directional: bool = True) -> Iterator[Viola
                 continue  # evaluation-failed, algebraic-not-settable, enable-handshake (ODE)
             for vr, v in zip(unknowns, values):
                 if not math.isfinite(v):
-                    _note(found, layout.name(vr), _var_location(ctx, vr), mode, point, v)
+                    _note(found, layout.name(vr), var_location(ctx, vr), mode, point, v)
     dae = ctx.dae
     if directional and layout.provides_directional and dae is not None:
         _directional(ctx, layout, dae, found)
@@ -484,7 +264,7 @@ def _note(found: dict[str, dict[str, Any]], subject: str, location: Location, mo
 
 def _directional(ctx: ProbeContext, layout: Layout, dae: Instance,
                  found: dict[str, dict[str, Any]]) -> None:
-    unknowns = _unknowns(layout)
+    unknowns = unknowns_of(layout)
     knowns = list(dict.fromkeys([*layout.states, *layout.algebraic, *layout.inputs]))
     if not unknowns or not knowns:
         return
@@ -496,7 +276,7 @@ def _directional(ctx: ProbeContext, layout: Layout, dae: Instance,
             return  # the derivative probes report a failing fmi3GetDirectionalDerivative
         for vr, v in zip(unknowns, column):
             if not math.isfinite(v):
-                _note(found, f"d({layout.name(vr)})", _unknown_location(ctx, vr), "dae", point,
+                _note(found, f"d({layout.name(vr)})", unknown_location(ctx, vr), "dae", point,
                       v, what="the directional derivative (all knowns seeded with 1)")
 
 
@@ -507,17 +287,17 @@ def evaluation_failed(ctx: ProbeContext) -> Iterator[Violation]:
     """DAE-41: in DAE mode, at every sampled point, time, states and inputs can be set and the
     residuals, derivatives and outputs read (fmi3GetFloat64, fmi3GetContinuousStateDerivatives).
     A rejected algebraic variable is algebraic-not-settable's finding: the probe is skipped."""
-    dae = _dae(ctx)
-    layout = _layout(ctx)
-    unknowns = _unknowns(layout)
+    dae = dae_of(ctx)
+    layout = layout_of(ctx)
+    unknowns = unknowns_of(layout)
     for point in ctx.points:
         try:
             dae.set_point(point, algebraic=False)
         except FmiError as exc:
             yield Violation(
                 f"setting time, states and inputs in DAE mode fails at point {point.label}: "
-                f"{exc.call} returned {exc.status}", _root_location(ctx),
-                evidence(_error_evidence(exc), point=point.label, t=point.t), subject=exc.call)
+                f"{exc.call} returned {exc.status}", root_location(ctx),
+                evidence(error_evidence(exc), point=point.label, t=point.t), subject=exc.call)
             continue
         values = [point.values[vr] for vr in layout.algebraic if vr in point.values]
         try:
@@ -533,16 +313,14 @@ def evaluation_failed(ctx: ProbeContext) -> Iterator[Violation]:
                 yield Violation(
                     f"reading the residuals, derivatives and outputs in DAE mode fails at "
                     f"point {point.label}: {exc.call} returned {exc.status}",
-                    _root_location(ctx),
-                    evidence(_error_evidence(exc), point=point.label, t=point.t,
+                    root_location(ctx),
+                    evidence(error_evidence(exc), point=point.label, t=point.t,
                              unknowns=[layout.name(vr) for vr in unknowns]),
                     subject=exc.call)
                 break
 
 
 PROBES = {
-    "DAE710": enable_handshake,
-    "DAE711": dae_initialization_refused,
     "DAE720": algebraic_not_settable,
     "DAE721": initial_residual_nonzero,
     "DAE722": evaluation_not_repeatable,

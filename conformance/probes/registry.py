@@ -20,9 +20,15 @@ def register(family: Mapping[str, Probe]) -> None:
         PROBES[code] = probe
 
 
+from .handshake import PROBES as _handshake  # noqa: E402
+
+register(_handshake)
 from .basic import PROBES as _basic  # noqa: E402
 
 register(_basic)
 from .derivatives import PROBES as _derivatives  # noqa: E402
 
 register(_derivatives)
+from .simulation import PROBES as _simulation  # noqa: E402
+
+register(_simulation)

@@ -20,7 +20,7 @@ from __future__ import annotations
 import ctypes
 import logging
 import os
-from typing import Any, Callable, Sequence
+from typing import Any, Callable, NamedTuple, Sequence
 
 import numpy as np
 
@@ -28,7 +28,8 @@ from .api import FmiError, Point, ProbeSkipped
 from .sampling import Layout
 from .worker import CallRecord
 
-__all__ = ["CallRecord", "Instance", "Layout", "Library", "PointNotSet", "start_instance"]
+__all__ = ["CallRecord", "Dependency", "Instance", "Layout", "Library", "PointNotSet",
+           "start_instance"]
 
 log = logging.getLogger(__name__)
 
@@ -36,6 +37,20 @@ STATUS_NAMES = {0: "fmi3OK", 1: "fmi3Warning", 2: "fmi3Discard", 3: "fmi3Error",
 MAX_LOG_MESSAGES = 200          # per call; an FMU that floods its logger is cut off here
 MAX_MESSAGE_CHARS = 1000
 INIT_CALLS = ("fmi3EnterInitializationMode", "fmi3ExitInitializationMode")
+# fmi3DependencyKind in the order of the C enum; fmi3Independent has no XML counterpart (MS-13)
+DEPENDENCY_KINDS = ("independent", "constant", "fixed", "tunable", "discrete", "dependent")
+MAX_DEPENDENCIES = 10_000_000   # a larger count from the FMU is garbage, not an allocation
+
+
+class Dependency(NamedTuple):
+    """One entry of fmi3GetVariableDependencies: the independent's value reference, its
+    dependenciesKind ("dependent", "constant", ..., or "invalid (k)" for a value outside the
+    enum) and the element indices of independent and dependent (0 for scalars)."""
+
+    vr: int
+    kind: str
+    element: int = 0
+    dependent_element: int = 0
 
 
 class PointNotSet(ProbeSkipped):
@@ -309,6 +324,36 @@ class Instance:
                 seed: np.ndarray) -> np.ndarray:
         self._set_or_skip(point)
         return self._derivative("fmi3GetAdjointDerivative", unknowns, knowns, seed, len(knowns))
+
+    def directional_as_set(self, unknowns: Sequence[int], knowns: Sequence[int],
+                           seed: np.ndarray) -> np.ndarray:
+        """fmi3GetDirectionalDerivative at the values already set, no point set first: for
+        callers that set time, states and algebraic variables themselves (the simulation)."""
+        return self._derivative("fmi3GetDirectionalDerivative", unknowns, knowns, seed,
+                                len(unknowns))
+
+    def variable_dependencies(self, vr: int) -> list[Dependency]:
+        """The per-element dependencies of ``vr`` in the instance's current state:
+        fmi3GetNumberOfVariableDependencies, then fmi3GetVariableDependencies (FmiError if the
+        FMU refuses either or reports an implausible count)."""
+        count = ctypes.c_size_t()
+        self._fmi("fmi3GetNumberOfVariableDependencies", vr, ctypes.byref(count))
+        n = count.value
+        if n > MAX_DEPENDENCIES:
+            raise FmiError("fmi3GetNumberOfVariableDependencies",
+                           f"an implausible nDependencies = {n}", self.library.log)
+        if n == 0:
+            return []
+        dependent_elements = (ctypes.c_size_t * n)()
+        independents = (ctypes.c_uint32 * n)()
+        elements = (ctypes.c_size_t * n)()
+        kinds = (ctypes.c_int * n)()
+        self._fmi("fmi3GetVariableDependencies", vr, dependent_elements, independents,
+                  elements, kinds, n)
+        return [Dependency(int(independents[k]),
+                           DEPENDENCY_KINDS[kinds[k]] if 0 <= kinds[k] < len(DEPENDENCY_KINDS)
+                           else f"invalid ({kinds[k]})", int(elements[k]),
+                           int(dependent_elements[k])) for k in range(n)]
 
     def _derivative(self, fname: str, unknowns: Sequence[int], knowns: Sequence[int],
                     seed: np.ndarray, n_out: int) -> np.ndarray:

@@ -33,6 +33,11 @@ DEFECTS: list[Defect] = [
         '<ContinuousStateDerivative valueReference="2" dependencies="1 5 7" '
         'dependenciesKind="dependent dependent dependent"/>'),),
            note="der(x1) = sin(x1) + sin(z1*z2*u1) depends on z2, which the manifest leaves out"),
+    # fmi3GetVariableDependencies against the manifest: Chain declares
+    # providesPerElementDependencies and its framework reports the model's pattern.
+    Defect("DAE742", "Chain", defines=("DEFECT_EXTRA_DEPENDENCY",),
+           note="in DAE mode fmi3GetVariableDependencies says y depends on x, which the "
+                "manifest leaves out"),
     Defect("DAE743", "SimpleDAE", manifest_edits=((
         '<Output valueReference="9" dependencies="1 5 7 8" '
         'dependenciesKind="dependent dependent dependent dependent"/>',

@@ -116,6 +116,85 @@ SCENES["Chain"] = Scene(
     f=lambda x, w, u: np.array([w[0] - x[0]]), g=_chain_g,
     h=lambda x, w, u: np.array([w[-1]]),
     x_test=[0.7], u_test=[0.3], x_alt=[-0.4], u_alt=[-0.2])
+
+
+# ---------------------------------------------- hard scenes (issue 5; see their README.md)
+
+def _akzo_rates(x, w):
+    y1, y2, y3, y4, y5 = x
+    s2 = np.sqrt(y2)
+    return (18.7 * y1 ** 4 * s2, 0.58 * y3 * y4, 0.58 / 34.4 * y1 * y5, 0.09 * y1 * y4 ** 2,
+            0.42 * w[0] ** 2 * s2, 3.3 * (0.9 / 737.0 - y2))
+
+
+def _akzo_f(x, w, u):
+    r1, r2, r3, r4, r5, fin = _akzo_rates(x, w)
+    return np.array([-2 * r1 + r2 - r3 - r4, -0.5 * r1 - r4 - 0.5 * r5 + fin, r1 - r2 + r3,
+                     -r2 + r3 - 2 * r4, r2 - r3 + r5])
+
+
+def _fourbar(length_unit, force_unit):
+    """f and g of tests/scenes/FourBar/fourbar.h, written again in numpy (same operation
+    order as the C code: the moment balances cancel terms of 1e3, so rounding shows)."""
+    l1, l2, l3, fz, fy, pn, pt = 0.35, 0.30, 0.30, 1e4, -1e4, -0.1, 0.3
+    mass1, mass3 = 4.0 * l1 * l1 / 3.0 + 20.0 * l1 * l1, 2.0 * l3 * l3 / 3.0 + 10.0 * l3 * l3
+    wb, wc = (4.0 / 2.0 + 20.0) * 9.81 * l1, (2.0 / 2.0 + 10.0) * 9.81 * l3
+    rscale = np.array([force_unit * length_unit] * 3 + [length_unit] * 2)
+
+    def g(x, w, u):
+        (t1, t2, t3, o1, o2, o3), (a1, a2, a3) = x, w[:3]
+        lx, ly = w[3] * force_unit, w[4] * force_unit
+        c1, s1, c2, s2, c3, s3 = np.cos(t1), np.sin(t1), np.cos(t2), np.sin(t2), np.cos(t3), \
+            np.sin(t3)
+        res = np.array([
+            mass1 * a1 + l1 * (-s1 * lx + c1 * ly)
+            - (-wb * c1 + l1 * (-fy * s1 + fz * c1) - 4e4 * (t1 - -0.013) - 100.0 * o1),
+            -l2 * (c2 * lx + s2 * ly) - (-pn * (fy * c2 + fz * s2) + pt * (-fy * s2 + fz * c2)),
+            mass3 * a3 - l3 * (-s3 * lx + c3 * ly) - (-wc * c3),
+            -l1 * s1 * a1 - l2 * c2 * a2 + l3 * s3 * a3
+            - l1 * c1 * o1 * o1 + l2 * s2 * o2 * o2 + l3 * c3 * o3 * o3,
+            l1 * c1 * a1 - l2 * s2 * a2 - l3 * c3 * a3
+            - l1 * s1 * o1 * o1 - l2 * c2 * o2 * o2 + l3 * s3 * o3 * o3])
+        return res / rscale
+
+    return (lambda x, w, u: np.array([x[3], x[4], x[5], w[0], w[1], w[2]])), g
+
+
+_EPS_NS = 1e-3   # NearSingular's default NEAR_SINGULAR_EPS
+_FB_SI, _FB_SCALED = _fourbar(1.0, 1.0), _fourbar(1e-3, 1e3)
+_FB_X_TEST = [0.09, 0.1003, 0.085, -1.2, 0.002, -1.4]
+_FB_X_ALT = [0.075, 0.1006, 0.07, 0.3, -0.004, 0.4]
+
+SCENES.update({
+    "Akzo": Scene(
+        "Akzo", vr_x=[2, 4, 6, 8, 10], vr_der=[3, 5, 7, 9, 11], vr_w=[12], vr_res=[13], vr_u=[],
+        vr_y=[], vr_enable=1, tunable=False, x0=[0.444, 0.00123, 0.0, 0.007, 0.0], w0=[0.36],
+        x_nominal=[0.1, 1e-3, 0.1, 1e-3, 0.01], f=_akzo_f,
+        g=lambda x, w, u: np.array([115.83 * x[0] * x[3] - w[0]]),
+        h=lambda x, w, u: np.zeros(0),
+        x_test=[0.3, 1.1e-3, 0.08, 2e-3, 0.01], u_test=[],
+        x_alt=[0.2, 0.9e-3, 0.12, 1e-3, 0.015], u_alt=[]),
+    "VanDerPolDAE": Scene(
+        "VanDerPolDAE", vr_x=[2], vr_der=[3], vr_w=[4], vr_res=[5], vr_u=[], vr_y=[],
+        vr_enable=1, tunable=False, x0=[2.0], w0=[-0.5], x_nominal=[1.0],
+        f=lambda x, w, u: np.array([w[0]]),
+        g=lambda x, w, u: np.array([(1 - x[0] ** 2) * w[0] - x[0]]),
+        h=lambda x, w, u: np.zeros(0), x_test=[1.8], u_test=[], x_alt=[1.5], u_alt=[]),
+    "NearSingular": Scene(
+        "NearSingular", vr_x=[2], vr_der=[3], vr_w=[4, 5], vr_res=[6, 7], vr_u=[], vr_y=[],
+        vr_enable=1, tunable=False, x0=[1.0], w0=[0.0, 0.0], x_nominal=[1.0],
+        f=lambda x, w, u: np.array([-np.sin(w[0] + 2 * w[1])]),
+        g=lambda x, w, u: np.array([w[0] + 2 * w[1] - x[0],
+                                    w[0] + (2 + _EPS_NS) * w[1] - x[0] - _EPS_NS * np.sin(x[0])]),
+        h=lambda x, w, u: np.zeros(0), x_test=[0.7], u_test=[], x_alt=[-0.4], u_alt=[]),
+    **{name: Scene(
+        name, vr_x=[2, 4, 6, 8, 10, 12], vr_der=[3, 5, 7, 9, 11, 13], vr_w=[14, 15, 16, 17, 18],
+        vr_res=[19, 20, 21, 22, 23], vr_u=[], vr_y=[], vr_enable=1, tunable=False,
+        x0=[0.1, 0.1, 0.1, 0.0, 0.0, 0.0], w0=[0.0] * 5, x_nominal=[0.1, 0.1, 0.1, 1.0, 1.0, 1.0],
+        f=fg[0], g=fg[1], h=lambda x, w, u: np.zeros(0),
+        x_test=_FB_X_TEST, u_test=[], x_alt=_FB_X_ALT, u_alt=[])
+       for name, fg in (("FourBar", _FB_SI), ("FourBarScaled", _FB_SCALED))},
+})
 PARAMS = sorted(SCENES)
 
 

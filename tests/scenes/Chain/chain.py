@@ -1,11 +1,12 @@
 """The Chain scene at any size: its XML for N algebraic variables, and the FMU built for N.
 
-``tests/scenes/Chain/{modelDescription,fmi-ls-manifest}.xml`` are ``chain_xml(4)`` (a test
-checks it); :func:`build_chain` compiles model.c with ``-DCHAIN_N=N`` and the framework's
-``FMU_MAX_VARS`` raised to the next power of two, then swaps the XML for N's in the archive.
-See model.c for the equations. The framework keeps dense work arrays of (4 FMU_MAX_VARS) x
-(3 FMU_MAX_VARS + 1) doubles on the stack, so above a few hundred the binary needs a larger
-stack than the default 8 MiB (the benchmark runs it in a thread with its own stack).
+``tests/scenes/Chain/{modelDescription,fmi-ls-manifest}.xml`` are ``model_description(4)`` and
+``manifest(4)`` (a test checks it); :func:`build_chain` compiles model.c with ``-DCHAIN_N=N``
+and ``FMU_MAX_VARS`` (the capacity of the model's value-reference tables) raised to the next
+power of two, then swaps the XML for N's in the archive. See model.c for the equations. The
+model declares its Jacobian's pattern, so the framework's work arrays are O(N) heap arrays and
+a derivative call costs O(N); the binary also implements fmi3GetVariableDependencies
+(``providesPerElementDependencies="true"``).
 
     python -m tests.scenes.Chain.chain 4 --write    # rewrite the committed XML
 """
@@ -23,7 +24,7 @@ from tests.scenes.build import MANIFEST_ENTRY, build_scene
 HERE = Path(__file__).resolve().parent
 CACHE = HERE.parents[2] / ".cache" / "chain"
 DEFAULT_N = 4
-MAX_N = 4096
+MAX_N = 16384
 
 
 def vr_w(i: int) -> int:
@@ -53,7 +54,8 @@ _HEADER = """<?xml version="1.0" encoding="UTF-8"?>
     modelIdentifier="Chain"
     canGetAndSetFMUState="true"
     providesDirectionalDerivatives="true"
-    providesAdjointDerivatives="true"/>
+    providesAdjointDerivatives="true"
+    providesPerElementDependencies="true"/>
 
   <DefaultExperiment startTime="0" stopTime="1"/>
 

@@ -11,7 +11,8 @@
  * The model file defines exactly one object, `const ModelDef MODEL`, which
  * lists the value references of every variable, the start and nominal values
  * and two callbacks: `eval` (f, g, h) and `partials` (their analytic partial
- * derivatives).  Everything else (state machine, Newton solver for ODE mode,
+ * derivatives, dense), or instead of `partials` the pair `pattern` / `partials_sparse`
+ * (the same derivatives, only the structural nonzeros).  Everything else (state machine, Newton solver for ODE mode,
  * total derivatives, directional/adjoint derivatives) is in the framework.
  *
  * Deliberately defective variants are built by compiling with -DDEFECT_xxx;
@@ -22,8 +23,9 @@
 
 #include "fmi3Functions.h"
 
-/* Upper bound for each of nx, nw, nu, ny; a scalable scene (Chain) raises it with
- * -DFMU_MAX_VARS=... (the framework's dense work arrays grow with its square). */
+/* Capacity of the value-reference, start and nominal tables of ModelDef below, i.e. the
+ * largest nx, nw, nu, ny; a scalable scene (Chain) raises it with -DFMU_MAX_VARS=....
+ * The framework sizes its own work arrays from nx, nw, nu, ny and keeps them on the heap. */
 #ifndef FMU_MAX_VARS
 #define FMU_MAX_VARS 8
 #endif
@@ -40,6 +42,37 @@ typedef void (*ModelEvalFn)(double t, const double x[], const double w[],
  */
 typedef void (*ModelPartialsFn)(double t, const double x[], const double w[],
                                 const double u[], double J[]);
+
+/*
+ * Optional sparse interface (for large models; the dense `partials` above keeps working).
+ *
+ * `pattern(entries)` lists the structural nonzeros of the same matrix: called once per
+ * instance with NULL, it returns their number nnz; called again with an array of nnz
+ * entries, it fills it (and returns nnz again).  Rows and columns are those of the D_*
+ * macros (use ROW_* and COL_* below); an entry may appear more than once (values add up).
+ * `kind` is what the unknown's `dependenciesKind` says about that known in DAE mode
+ * (fmi3Constant, fmi3Fixed, ...; fmi3Independent, the value an initializer leaves out, is
+ * read as fmi3Dependent).  `partials_sparse(t, x, w, u, values)` writes the nnz values in
+ * the order of the pattern (the framework zeroes `values` first).
+ *
+ * With a pattern the framework works in O(nnz): directional and adjoint derivatives are
+ * sparse products, dg/dw is factorised as a band matrix whose bandwidth comes from the
+ * pattern (LU with partial pivoting; keep the algebraic variables ordered so that dg/dw is
+ * banded), and fmi3GetNumberOfVariableDependencies / fmi3GetVariableDependencies report
+ * the pattern (DAE mode) or the dependencies it implies through g = 0 (ODE mode, and
+ * before fmi3ExitInitializationMode), so the XML can declare
+ * providesPerElementDependencies="true".  Without a pattern every entry is structural:
+ * dense products and a dense LU, and no per-element dependencies.
+ */
+typedef struct {
+    int row;                  /* [ der | res | y ] */
+    int col;                  /* [ x | w | u | t ] */
+    fmi3DependencyKind kind;
+} ModelEntry;
+
+typedef int (*ModelPatternFn)(ModelEntry entries[]);
+typedef void (*ModelPartialsSparseFn)(double t, const double x[], const double w[],
+                                      const double u[], double values[]);
 
 typedef struct {
     int nx;  /* continuous states x (and their derivatives) */
@@ -65,10 +98,22 @@ typedef struct {
     double w_nominal[FMU_MAX_VARS];   /* used to scale the Newton step */
 
     ModelEvalFn     eval;
-    ModelPartialsFn partials;
+    ModelPartialsFn partials;                 /* dense; or NULL with the two below */
+
+    ModelPatternFn        pattern;            /* optional: the sparse interface above */
+    ModelPartialsSparseFn partials_sparse;
 } ModelDef;
 
 extern const ModelDef MODEL;
+
+/*
+ * Called by a model's eval or partials when it cannot be evaluated at the point
+ * it was given (e.g. the square root of a state that has become negative).  The
+ * framework then returns fmi3Discard from the FMI call that needed the values
+ * (the importer is expected to retry with a smaller step); the callback should
+ * still fill its outputs (NaN is fine).  `reason` is a static string for the log.
+ */
+void model_discard(const char *reason);
 
 /*
  * Helpers for model.c.  They need the model's sizes as the macros NX, NW, NU
@@ -88,5 +133,14 @@ extern const ModelDef MODEL;
 #define D_OUT_W(i, j)  D_AT(NX + NW + (i), NX + (j))
 #define D_OUT_U(i, j)  D_AT(NX + NW + (i), NX + NW + (j))
 #define D_OUT_T(i)     D_AT(NX + NW + (i), NX + NW + NU)
+
+/* Rows and columns for ModelEntry (same NX, NW, NU macros). */
+#define ROW_DER(i)     (i)
+#define ROW_RES(i)     (NX + (i))
+#define ROW_OUT(i)     (NX + NW + (i))
+#define COL_X(j)       (j)
+#define COL_W(j)       (NX + (j))
+#define COL_U(j)       (NX + NW + (j))
+#define COL_T          (NX + NW + NU)
 
 #endif /* DAE_MODEL_H */

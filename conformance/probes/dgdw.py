@@ -1,0 +1,274 @@
+"""Probes of dg/dw and of ODE against DAE mode (DAE745-DAE747), on the Jacobian survey.
+
+* ``algebraic-jacobian-ill-conditioned`` / ``-singular``: the condition number of dg/dw at the
+  sampling points, scaled by nominals, from the FMU's directional derivatives (else finite
+  differences);
+* ``ode-dae-inconsistent``: at the same (t, x, u), solve g = 0 for w by Newton with the FMU's
+  dg/dw from the w that ODE mode gives, and compare the derivatives and outputs of both modes.
+
+Registered through ``conformance.probes.derivatives.PROBES`` (the derivative family).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Iterator
+
+import numpy as np
+
+from ..findings import Violation, evidence
+from . import numdiff
+from .api import Evaluator, FmiError, Point, ProbeContext, ProbeSkipped
+from .jacobian import PointSurvey, Survey, point_evidence, row_scale, surveyed
+
+
+def _algebraic_blocks(s: Survey) -> Iterator[tuple[PointSurvey, np.ndarray, str]]:
+    """dg/dw at every point, scaled: columns by the algebraic variables' nominals, rows by the
+    residuals' nominals when declared, else equilibrated (a residual's scale is arbitrary)."""
+    layout = s.layout
+    assert layout is not None
+    res = layout.indices("residual", of="rows")
+    alg = layout.indices("algebraic")
+    if res.size == 0 or res.size != alg.size:
+        return  # residual-count-mismatch (static) explains a non-square dg/dw
+    rpos = {int(i): a for a, i in enumerate(res)}
+    cpos = {int(j): a for a, j in enumerate(alg)}
+    source = "fmi3GetDirectionalDerivative" if s.directional else "finite differences"
+    for ps in s.points:
+        e = ps.entries
+        g = np.zeros((res.size, alg.size))
+        for k, (i, j) in enumerate(zip(e.rows.tolist(), e.cols.tolist())):
+            if i in rpos and j in cpos:
+                value = e.dd[k] if s.directional and not np.isnan(e.dd[k]) else e.fd[k]
+                g[rpos[i], cpos[j]] = value
+        if not np.all(np.isfinite(g)):
+            continue  # nan-or-inf reports it
+        g = g * layout.nominal[alg][None, :]
+        for a, i in enumerate(res):
+            nominal = layout.rows[i].nominal
+            biggest = np.abs(g[a]).max(initial=0.0)
+            g[a] = g[a] / nominal if nominal else (g[a] / biggest if biggest > 0 else g[a])
+        yield ps, g, source
+
+
+def _algebraic_survey(ctx: ProbeContext) -> Survey:
+    s = surveyed(ctx)
+    assert s.layout is not None
+    residuals = s.layout.indices("residual", of="rows").size
+    algebraic = s.layout.indices("algebraic").size
+    if residuals == 0 or residuals != algebraic:
+        raise ProbeSkipped(f"dg/dw is {residuals} x {algebraic}: no square matrix to assess "
+                           "(residual-count-mismatch reports a difference)")
+    return s
+
+
+def _condition(g: np.ndarray) -> tuple[float, bool, np.ndarray]:
+    """2-norm condition number, whether numerically singular (smallest singular value below
+    max(shape) * eps * largest, numpy's matrix_rank criterion), and the direction of the
+    smallest singular value (which algebraic variables the near-singularity involves)."""
+    if not np.all(np.isfinite(g)):
+        return np.inf, True, np.zeros(g.shape[1])
+    _, sv, vt = np.linalg.svd(g)
+    if sv[0] == 0:
+        return np.inf, True, vt[-1]
+    singular = sv[-1] <= sv[0] * max(g.shape) * numdiff.EPS
+    return (float(sv[0] / sv[-1]) if sv[-1] > 0 else np.inf), bool(singular), vt[-1]
+
+
+def _worst_condition(s: Survey, singular: bool) -> tuple | None:
+    worst = None
+    for ps, g, source in _algebraic_blocks(s):
+        cond, is_singular, direction = _condition(g)
+        if is_singular == singular and (worst is None or cond > worst[1]):
+            worst = (ps, cond, direction, source, g.shape[0])
+    return worst
+
+
+def _condition_violation(s: Survey, found: tuple, message: str, **extra) -> Violation:
+    layout = s.layout
+    assert layout is not None
+    ps, cond, direction, source, n = found
+    alg = layout.indices("algebraic")
+    order = np.argsort(-np.abs(direction))[:5]
+    involved = [layout.cols[alg[k]].name for k in order if abs(direction[k]) > 1e-3]
+    res = layout.indices("residual", of="rows")
+    return Violation(message, layout.rows[res[0]].location, evidence(
+        condition_number=cond if np.isfinite(cond) else "inf", size=n, source=source,
+        scale="columns by the algebraic variables' nominal values, rows by the residuals' "
+        "nominal values or else equilibrated", involved=involved, **extra,
+        point=point_evidence(layout, ps)))
+
+
+def algebraic_jacobian_ill_conditioned(ctx: ProbeContext, *, max_condition: float = 1e8
+                                       ) -> Iterator[Violation]:
+    """The scaled dg/dw has a condition number above ``max_condition`` (but is not singular)."""
+    s = _algebraic_survey(ctx)
+    found = _worst_condition(s, singular=False)
+    if found is not None and found[1] > max_condition:
+        yield _condition_violation(
+            s, found, "dg/dw, the Jacobian of the residuals with respect to the algebraic "
+            "variables, is ill-conditioned: an importer's Newton iteration loses accuracy",
+            threshold=max_condition)
+
+
+def algebraic_jacobian_singular(ctx: ProbeContext) -> Iterator[Violation]:
+    """The scaled dg/dw is numerically singular at a sampling point (DAE-51)."""
+    s = _algebraic_survey(ctx)
+    found = _worst_condition(s, singular=True)
+    if found is not None:
+        yield _condition_violation(
+            s, found, "dg/dw, the Jacobian of the residuals with respect to the algebraic "
+            "variables, is singular: the DAE does not have index 1 here",
+            threshold=f"smallest singular value <= {found[4]} * eps * largest")
+
+
+# ------------------------------------------------------------------------- ODE against DAE
+
+@dataclass
+class _Solve:
+    w: np.ndarray
+    residual: np.ndarray
+    iterations: int
+    converged: bool
+
+
+def _dgdw(ev: Evaluator, point: Point, res: list[int], alg: list[int], directional: bool,
+          steps: np.ndarray) -> np.ndarray:
+    """dg/dw from the FMU (column by column), or central differences without it."""
+    n = len(alg)
+    out = np.zeros((len(res), n))
+    for k in range(n):
+        e = np.zeros(n)
+        e[k] = 1.0
+        if directional:
+            out[:, k] = ev.directional(point, res, alg, e)
+        else:
+            plus = Point(point.t, {**point.values, alg[k]: point.values[alg[k]] + steps[k]})
+            minus = Point(point.t, {**point.values, alg[k]: point.values[alg[k]] - steps[k]})
+            out[:, k] = (ev.evaluate(plus, res) - ev.evaluate(minus, res)) / (2 * steps[k])
+    return out
+
+
+def _newton(ev: Evaluator, base: Point, res: list[int], alg: list[int], w0: np.ndarray,
+            nominal: np.ndarray, noise: np.ndarray, weights: np.ndarray, directional: bool,
+            max_iterations: int) -> _Solve:
+    """Solve g(t, x, w, u) = 0 for w from w0: Newton with the FMU's dg/dw, halving the step
+    while the weighted residual norm does not decrease; converged when every residual is
+    within its rounding noise."""
+    def point(w: np.ndarray) -> Point:
+        return Point(base.t, {**base.values, **dict(zip(alg, w.tolist()))}, base.label)
+
+    positive = weights[weights > 0]
+    weights = np.where(weights > 0, weights, positive.min() if positive.size else 1.0)
+
+    def size(g: np.ndarray) -> float:
+        return float(np.linalg.norm(g / weights))
+
+    w = np.asarray(w0, dtype=float).copy()
+    g = ev.evaluate(point(w), res)
+    for it in range(max_iterations):
+        if np.all(np.abs(g) <= noise):
+            return _Solve(w, g, it, True)
+        jac = _dgdw(ev, point(w), res, alg, directional,
+                    numdiff.step_sizes(w, nominal, method="central"))
+        dw = np.linalg.lstsq(jac, -g, rcond=None)[0]
+        lam = 1.0
+        while True:
+            trial = w + lam * dw
+            g_trial = ev.evaluate(point(trial), res)
+            if size(g_trial) < size(g) or lam < 1e-4:
+                break
+            lam /= 2
+        w, g = trial, g_trial
+        if np.max(np.abs(lam * dw) / nominal) <= 1e-14:
+            return _Solve(w, g, it + 1, bool(np.all(np.abs(g) <= 1e3 * noise)))
+    return _Solve(w, g, max_iterations, bool(np.all(np.abs(g) <= noise)))
+
+
+def ode_dae_inconsistent(ctx: ProbeContext, *, rtol: float = 1e-6, margin: float = 10.0,
+                         ulps: float = 100.0, max_iterations: int = 20) -> Iterator[Violation]:
+    """At the same (t, x, u), the derivatives and outputs of ODE mode equal those of DAE mode
+    at the algebraic variables that solve the residuals (DAE-42)."""
+    s = surveyed(ctx)
+    if ctx.ode is None:
+        failure = ctx.facts.get("ode_error")
+        raise ProbeSkipped("ODE mode is not available" + (f": {failure}" if failure else ""))
+    layout = s.layout
+    assert layout is not None
+    res_i = layout.indices("residual", of="rows")
+    cmp_i = np.array([i for i, r in enumerate(layout.rows) if r.role != "residual"], dtype=np.intp)
+    alg_j = layout.indices("algebraic")
+    if res_i.size == 0 or alg_j.size == 0 or cmp_i.size == 0:
+        raise ProbeSkipped("no residuals, algebraic variables, derivatives or outputs to compare")
+    res = [layout.rows[i].vr for i in res_i]
+    cmp = [layout.rows[i].vr for i in cmp_i]
+    alg = [layout.cols[j].vr for j in alg_j]
+    worst = None
+    for ps in s.points:
+        found = _compare_modes(ctx, s, ps, res_i, cmp_i, alg_j, res, cmp, alg, rtol=rtol,
+                               margin=margin, ulps=ulps, max_iterations=max_iterations)
+        if found is not None and (worst is None or found[0] > worst[0]):
+            worst = found
+    if worst is not None:
+        yield Violation(
+            "ODE mode and DAE mode disagree: at the same time, states and inputs, the "
+            "derivatives or outputs of ODE mode differ from those of DAE mode at the algebraic "
+            "variables that solve the residuals", layout.rows[res_i[0]].location,
+            evidence(worst[1]))
+
+
+def _compare_modes(ctx, s: Survey, ps: PointSurvey, res_i, cmp_i, alg_j, res, cmp, alg, *,
+                   rtol, margin, ulps, max_iterations):
+    layout = s.layout
+    values = {c.vr: float(v) for c, v in zip(layout.cols, ps.x)
+              if c.role in ("state", "input")}
+    ode_point = Point(ps.point.t, values, ps.point.label)
+    try:
+        ode = ctx.ode.evaluate(ode_point, cmp)
+    except FmiError:
+        return None  # ODE mode cannot evaluate here: the handshake probe reports it
+    try:
+        w0 = np.asarray(ctx.ode.evaluate(ode_point, alg), dtype=float)
+    except FmiError:  # w is not readable in ODE mode: start from the sampling point's w
+        w0 = ps.x[alg_j]
+    e = ps.entries
+    noise = margin * ulps * e.basis
+    scale = row_scale(layout, e)
+    base = Point(ps.point.t, {**values, **dict(zip(alg, w0.tolist()))}, ps.point.label)
+    try:
+        g0 = ctx.dae.evaluate(base, res)
+        res_tol = noise[res_i] + rtol * scale[res_i]
+        if np.all(np.abs(g0) <= res_tol):
+            solve = _Solve(w0, g0, 0, True)
+        else:
+            solve = _newton(ctx.dae, base, res, alg, w0, layout.nominal[alg_j],
+                            noise[res_i], res_tol, s.directional, max_iterations)
+        at = Point(base.t, {**base.values, **dict(zip(alg, solve.w.tolist()))}, base.label)
+        dae = ctx.dae.evaluate(at, cmp)
+    except (FmiError, np.linalg.LinAlgError):
+        return None
+    tol = rtol * (np.abs(ode) + scale[cmp_i]) + noise[cmp_i]
+    diff = np.abs(dae - ode)
+    finite = np.isfinite(diff) & np.isfinite(tol)   # non-finite values: nan-or-inf
+    if not np.all(np.isfinite(g0)) or np.all(diff[finite] <= tol[finite]) and (
+            solve.converged or np.all(np.abs(g0) <= res_tol)):
+        return None
+    diff = np.where(finite, diff, 0.0)
+    k = int(np.argmax(diff / np.maximum(tol, np.finfo(float).tiny)))
+    names = [layout.rows[i].name for i in cmp_i]
+    return float(diff[k] / tol[k]) if tol[k] > 0 else np.inf, {
+        "worst": names[k], "ode": dict(zip(names, ode.tolist())),
+        "dae": dict(zip(names, dae.tolist())), "tolerance": dict(zip(names, tol.tolist())),
+        "algebraic_ode": dict(zip([layout.cols[j].name for j in alg_j], w0.tolist())),
+        "algebraic_dae": dict(zip([layout.cols[j].name for j in alg_j], solve.w.tolist())),
+        "residual_at_ode_algebraic": dict(zip([layout.rows[i].name for i in res_i], g0.tolist())),
+        "newton_iterations": solve.iterations, "newton_converged": solve.converged,
+        "scale": "rtol * (|ODE value| + S_i) + margin * noise, S_i = sum_j |J_ij| * nominal_j",
+        "point": point_evidence(layout, ps)}
+
+
+
+PROBES = {
+    "DAE745": algebraic_jacobian_ill_conditioned,
+    "DAE746": algebraic_jacobian_singular,
+    "DAE747": ode_dae_inconsistent,
+}

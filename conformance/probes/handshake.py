@@ -1,0 +1,173 @@
+"""The handshake probes: switching DAE mode on and off (``enable-handshake``) and a refused
+initialisation in DAE mode (``dae-initialization-refused``, information under alpha.1).
+
+Each probe opens its own instances from the loaded :class:`~conformance.probes.session.Library`
+(``ctx.facts["library"]``) and walks the FMI calls one by one, so a finding names the call that
+failed and the sequence before it.
+"""
+from __future__ import annotations
+
+from typing import Any, Iterator
+
+from ..findings import Location, Violation, evidence
+from .api import FmiError, ProbeContext, ProbeSkipped
+from .common import error_evidence, layout_of, manifest_location, new_instance
+from .sampling import Layout
+from .session import INIT_CALLS, Instance, Library, configure, reconfigure
+
+# -------------------------------------------------------------------------- enable-handshake
+
+
+class _Steps:
+    """Runs the calls of a handshake one by one and remembers how far it got."""
+
+    def __init__(self) -> None:
+        self.done: list[str] = []
+
+    def __call__(self, label: str, fn: Any, *args: Any) -> Any:
+        result = fn(*args)
+        self.done.append(label)
+        return result
+
+
+def enable_handshake(ctx: ProbeContext) -> Iterator[Violation]:
+    """DAE-12, DAE-13, DAE-11: switch DAE mode on in Configuration Mode (and, for a tunable
+    switch, off and on again in Reconfiguration Mode); with the switch false, run as an ODE FMU.
+
+    An fmi3Error from fmi3Enter/ExitInitializationMode in DAE mode is not reported here: alpha.1
+    allows it (DAE-14), and ``dae-initialization-refused`` reports it as information.
+    """
+    layout = layout_of(ctx)
+    library: Library = ctx.facts["library"]  # type: ignore[assignment]
+    if layout.enable_status == "unusable":
+        raise ProbeSkipped("the enable parameter cannot be used (see the static findings)")
+    where = manifest_location(ctx, layout.enable, ("Enable",))
+    subject = layout.name(layout.enable) if layout.enable is not None else None
+    yield from _dae_handshake(ctx, layout, library, where, subject)
+    if layout.enable is not None:
+        yield from _ode_handshake(ctx, layout, library, where, subject)
+
+
+def _dae_handshake(ctx: ProbeContext, layout: Layout, library: Library, where: Location,
+                   subject: str | None) -> Iterator[Violation]:
+    steps = _Steps()
+    vr = layout.enable
+    inst = None
+    try:
+        inst = steps("fmi3InstantiateModelExchange", new_instance, library, "handshake-dae")
+        if vr is not None:
+            steps("fmi3EnterConfigurationMode", inst.enter_configuration_mode)
+            steps("fmi3SetBoolean(true)", inst.set_boolean, vr, True)
+            steps("fmi3ExitConfigurationMode", inst.exit_configuration_mode)
+        try:
+            steps("fmi3EnterInitializationMode", inst.enter_initialization_mode,
+                  layout.start_time)
+            if vr is not None and not steps("fmi3GetBoolean", inst.get_boolean, vr):
+                yield Violation(
+                    "the enable parameter {subject} reads back false in Initialization Mode "
+                    "after fmi3SetBoolean(true) in Configuration Mode", where,
+                    evidence(sequence=steps.done, expected=True, actual=False), subject)
+                return
+            steps("fmi3ExitInitializationMode", inst.exit_initialization_mode)
+        except FmiError as exc:
+            if exc.call in INIT_CALLS:
+                return  # DAE-14: allowed under alpha.1, reported by dae-initialization-refused
+            raise
+        steps("fmi3UpdateDiscreteStates", inst.update_discrete_states)
+        if vr is not None and layout.enable_tunable:
+            yield from _reconfigure(inst, vr, steps, where, subject)
+        steps("fmi3EnterContinuousTimeMode", inst.enter_continuous_time_mode)
+        steps("fmi3GetContinuousStateDerivatives", inst.get_derivatives,
+              len(layout.states))
+    except FmiError as exc:
+        yield Violation(
+            f"switching DAE mode on fails: {exc.call} returned {exc.status} after "
+            f"{' -> '.join(steps.done) or 'nothing'}", where,
+            evidence(error_evidence(exc), sequence=steps.done, mode="dae"), subject)
+    finally:
+        if inst is not None:
+            inst.free()
+
+
+def _reconfigure(inst: Instance, vr: int, steps: _Steps, where: Location,
+                 subject: str | None) -> Iterator[Violation]:
+    """DAE-13: Event Mode -> Reconfiguration Mode, switch off and on again, read back."""
+    for value in (False, True):
+        steps(f"fmi3EnterConfigurationMode (Reconfiguration, set {str(value).lower()})",
+              reconfigure, inst, value)
+        if steps("fmi3GetBoolean", inst.get_boolean, vr) != value:
+            yield Violation(
+                "the tunable enable parameter {subject} does not read back "
+                f"{str(value).lower()} after it was set in Reconfiguration Mode", where,
+                evidence(sequence=steps.done, expected=value, actual=not value), subject)
+
+
+def _ode_handshake(ctx: ProbeContext, layout: Layout, library: Library, where: Location,
+                   subject: str | None) -> Iterator[Violation]:
+    """DAE-11: with the switch false (its start value), an ordinary Model Exchange FMU."""
+    steps = _Steps()
+    inst = None
+    point = None
+    try:
+        inst = steps("fmi3InstantiateModelExchange", new_instance, library, "handshake-ode")
+        steps("fmi3EnterInitializationMode", inst.enter_initialization_mode, layout.start_time)
+        if steps("fmi3GetBoolean", inst.get_boolean, layout.enable):
+            yield Violation(
+                "the enable parameter {subject} reads true after instantiation: an FMU must "
+                "start in ODE mode", where, evidence(sequence=steps.done, expected=False,
+                                                     actual=True), subject)
+        steps("fmi3ExitInitializationMode", inst.exit_initialization_mode)
+        steps("fmi3UpdateDiscreteStates", inst.update_discrete_states)
+        steps("fmi3EnterContinuousTimeMode", inst.enter_continuous_time_mode)
+        for point in ctx.points:
+            inst.set_point(point)
+            steps(f"fmi3GetContinuousStateDerivatives at {point.label}", inst.get_derivatives,
+                  len(layout.ode_states))
+    except FmiError as exc:
+        at = f" at point {point.label}" if point is not None else ""
+        yield Violation(
+            f"with the enable parameter false the FMU does not run as an ordinary ODE FMU: "
+            f"{exc.call} returned {exc.status}{at}", where,
+            evidence(error_evidence(exc), sequence=steps.done, mode="ode",
+                     point=point.label if point else None), subject)
+    finally:
+        if inst is not None:
+            inst.free()
+
+
+# ---------------------------------------------------------------- dae-initialization-refused
+
+
+def dae_initialization_refused(ctx: ProbeContext) -> Iterator[Violation]:
+    """DAE-14: fmi3Enter/ExitInitializationMode returns an error in DAE mode (information)."""
+    layout = layout_of(ctx)
+    library: Library = ctx.facts["library"]  # type: ignore[assignment]
+    if layout.enable_status == "unusable":
+        raise ProbeSkipped("the enable parameter cannot be used (see the static findings)")
+    inst = new_instance(library, "init-dae")
+    try:
+        if layout.enable is not None:
+            configure(inst, True)
+        inst.enter_initialization_mode(layout.start_time)
+        inst.exit_initialization_mode()
+    except FmiError as exc:
+        if exc.call not in INIT_CALLS:
+            return  # a failing switch is enable-handshake's finding
+        switched = ctx.dae is not None and getattr(ctx.dae, "started", "") == "runtime-switch"
+        then = ("the probes switch DAE mode on at runtime, from Event Mode" if switched else
+                "DAE mode cannot be probed")
+        yield Violation(
+            f"the FMU refuses to initialise in DAE mode: {exc.call} returned {exc.status}; "
+            f"alpha.1 allows this (DAE-14), {then}",
+            manifest_location(ctx, layout.enable, ("Enable",)),
+            evidence(error_evidence(exc), dae_mode_probed="runtime-switch" if switched
+                     else None), subject=exc.call)
+    finally:
+        inst.free()
+
+
+
+PROBES = {
+    "DAE710": enable_handshake,
+    "DAE711": dae_initialization_refused,
+}

@@ -1,0 +1,366 @@
+"""The Jacobian survey shared by the derivative probes (derivatives.py, dgdw.py).
+
+In DAE mode the unknowns are the residuals, the state derivatives and the outputs; the knowns
+the states, the algebraic variables, the inputs and time. :func:`build_layout` reads the rows,
+columns and *declared* sparsity (the manifest ``dependencies``, what an importer colours its
+own Jacobian with) from the XML. At every sampling point the Jacobian is measured once
+(:func:`survey`, memoised in ``ctx.facts``): finite differences of the function coloured by the
+declared sparsity, the FMU's directional and adjoint derivatives coloured the same way, the
+declared zeros verified with a few random directions, and every row under suspicion measured
+again column by column (:func:`conformance.probes.colouring.measure`).
+
+Also the helpers the probes share: the row scale ``S_i = sum_j |J_ij| * nominal_j``, a point as
+evidence, and the per-FMU ``probe_errors`` the HTML report plots.
+"""
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..findings import Location
+from ..model import ModelDescription, Unknown, Variable
+from . import colouring as col
+from . import numdiff
+from .api import Evaluator, FmiError, Point, ProbeContext, ProbeSkipped
+
+log = logging.getLogger(__name__)
+
+FACT = "derivatives.survey"
+MAX_PROBE_ERRORS = 200
+
+
+@dataclass(frozen=True)
+class Settings:
+    """How the Jacobian is measured (not what counts as wrong: that is in the catalogue)."""
+
+    method: str = "central"     # finite differences, see numdiff.METHODS
+    directions: int = 2         # random directions verifying the declared zeros, per point
+    suspicion: float = 3.0      # re-measure a row column by column above this error multiple
+    ulps: float = numdiff.DEFAULT_ULPS
+    coloured: bool = True       # False: one column per group (the benchmark's reference)
+    use_derivatives: bool = True  # False: finite differences only (the benchmark)
+
+
+@dataclass(frozen=True)
+class Row:
+    vr: int
+    name: str
+    role: str                   # residual | derivative | output
+    explicit: bool              # the dependencies attribute is present (a claim)
+    location: Location
+    nominal: float | None = None  # declared nominal (residuals are scaled by it when given)
+
+
+@dataclass(frozen=True)
+class Column:
+    vr: int
+    name: str
+    role: str                   # state | algebraic | input | time
+    nominal: float
+    lower: float
+    upper: float
+
+
+@dataclass(frozen=True)
+class JacobianLayout:
+    """Rows, columns and the declared sparsity of the DAE-mode Jacobian."""
+
+    rows: tuple[Row, ...]
+    cols: tuple[Column, ...]
+    pattern: col.Pattern
+    kinds: tuple[str, ...]              # dependenciesKind of each declared entry
+    dd_columns: np.ndarray              # bool (n,): knowns passed to the FMU's derivatives
+
+    @property
+    def nominal(self) -> np.ndarray:
+        return np.array([c.nominal for c in self.cols])
+
+    def entry(self, i: int, j: int) -> str:
+        return f"d({self.rows[i].name})/d({self.cols[j].name})"
+
+    def indices(self, role: str, of: str = "cols") -> np.ndarray:
+        items = self.cols if of == "cols" else self.rows
+        return np.array([k for k, it in enumerate(items) if it.role == role], dtype=np.intp)
+
+
+@dataclass
+class PointSurvey:
+    point: Point
+    x: np.ndarray
+    entries: col.Entries
+
+
+@dataclass
+class Survey:
+    layout: JacobianLayout | None
+    reason: str = ""
+    points: list[PointSurvey] = field(default_factory=list)
+    failures: list[tuple[str, Point, FmiError]] = field(default_factory=list)
+    directional: bool = False
+    adjoint: bool = False
+    probed: bool = False        # the FMU's derivative functions were tried once
+
+
+# ---------------------------------------------------------------------------------- the layout
+
+def _float(text: str | None, default: float) -> float:
+    try:
+        return float(text) if text is not None else default
+    except ValueError:
+        return default
+
+
+def _scalar_float(model: ModelDescription, vr: int | None) -> Variable | None:
+    var = model.by_vr.get(vr) if vr is not None else None
+    return var if var is not None and var.is_float and not var.dimensions else None
+
+
+def _column(var: Variable, role: str) -> Column:
+    nominal = abs(_float(var.nominal, 1.0))
+    nominal = nominal if np.isfinite(nominal) and nominal > 0 else 1.0
+    return Column(var.vr, var.name, role, nominal, _float(var.minimum, -np.inf),
+                  _float(var.maximum, np.inf))
+
+
+def build_layout(ctx: ProbeContext) -> tuple[JacobianLayout | None, str]:
+    """The DAE-mode Jacobian's rows, columns and declared sparsity, or None and why."""
+    model, manifest = ctx.model, ctx.manifest
+    if model is None or manifest is None:
+        return None, "no model description or manifest"
+    cols: list[Column] = []
+    seen: set[int] = set()
+
+    def add(var: Variable | None, role: str) -> None:
+        if var is not None and var.vr not in seen:
+            seen.add(var.vr)
+            cols.append(_column(var, role))
+
+    for vr in model.state_vrs():
+        add(_scalar_float(model, vr), "state")
+    for ref in manifest.algebraic:
+        add(_scalar_float(model, ref.vr), "algebraic")
+    for var in model.variables:
+        if var.causality == "input" and var.variability == "continuous":
+            add(_scalar_float(model, var.vr), "input")
+    independent = [v for v in model.variables if v.causality == "independent"]
+    if independent:
+        add(_scalar_float(model, independent[0].vr), "time")
+    rows = _rows(model, manifest, seen)
+    if not rows or not cols:
+        return None, "no residuals, derivatives or outputs, or no knowns, to differentiate"
+    return _with_pattern(rows, cols, model), ""
+
+
+def _rows(model: ModelDescription, manifest, knowns: set[int]) -> list[tuple[Row, Unknown]]:
+    out: list[tuple[Row, Unknown]] = []
+    taken: set[int] = set()
+    for kind, role in (("Residual", "residual"), ("ContinuousStateDerivative", "derivative"),
+                       ("Output", "output")):
+        listed = manifest.unknowns(kind)
+        # An element kind the manifest leaves out (open question Q-02): take the core list,
+        # but claim nothing about its dependencies (those describe ODE mode).
+        inherited = not listed and kind != "Residual"
+        for u in (tuple(model.unknowns(kind)) if inherited else listed):
+            var = _scalar_float(model, u.vr)
+            if var is None or var.vr in taken or var.vr in knowns:
+                continue
+            taken.add(var.vr)
+            claim = u.dependencies is not None and not inherited
+            nominal = abs(_float(var.nominal, np.nan))
+            out.append((Row(var.vr, var.name, role, claim,
+                            Location(file=u.file, line=u.line, path=u.path),
+                            nominal if np.isfinite(nominal) and nominal > 0 else None), u))
+    return out
+
+
+def _with_pattern(rows: list[tuple[Row, Unknown]], cols: list[Column],
+                  model: ModelDescription) -> JacobianLayout:
+    index = {c.vr: j for j, c in enumerate(cols)}
+    row_cols: list[list[int]] = []
+    kinds_by_row: list[dict[int, str]] = []
+    for row, u in rows:
+        if not row.explicit:
+            row_cols.append(list(range(len(cols))))
+            kinds_by_row.append({})
+            continue
+        kinds = dict(zip(u.dependencies or (), u.dependencies_kind or ()))
+        listed = [index[vr] for vr in (u.dependencies or ()) if vr in index]
+        row_cols.append(listed)
+        kinds_by_row.append({index[vr]: k for vr, k in kinds.items() if vr in index})
+    pattern = col.Pattern.from_rows(len(cols), row_cols)
+    kinds = tuple(kinds_by_row[i].get(j, "dependent")
+                  for i, j in zip(pattern.rows.tolist(), pattern.cols.tolist()))
+    # Time is a known of the FMU's derivatives only where a dependencies list names it (PD-05).
+    explicit_time = {j for (row, _), cs in zip(rows, row_cols) if row.explicit for j in cs
+                     if cols[j].role == "time"}
+    dd = np.array([c.role != "time" or j in explicit_time for j, c in enumerate(cols)])
+    return JacobianLayout(tuple(r for r, _ in rows), tuple(cols), pattern, kinds, dd)
+
+
+# ------------------------------------------------------------------- the evaluator at a point
+
+class _At:
+    """The evaluator at one point, the knowns as a vector (time included)."""
+
+    def __init__(self, ev: Evaluator, layout: JacobianLayout, point: Point):
+        self.ev, self.layout, self.point = ev, layout, point
+        self.row_vrs = [r.vr for r in layout.rows]
+        self.dd_idx = np.flatnonzero(layout.dd_columns)
+        self.dd_vrs = [layout.cols[j].vr for j in self.dd_idx]
+        self.time = [j for j, c in enumerate(layout.cols) if c.role == "time"]
+        missing = [c.vr for c in layout.cols if c.role != "time" and c.vr not in point.values]
+        known = dict(point.values)
+        if missing:  # the sampler did not set them: read the instance's own values
+            known.update(zip(missing, ev.evaluate(point, missing).tolist()))
+        self.x = np.array([point.t if c.role == "time" else float(known[c.vr])
+                           for c in layout.cols])
+        self.base = self.at(np.zeros(len(layout.cols)))
+
+    def at(self, delta: np.ndarray) -> Point:
+        x = self.x + delta
+        t = float(x[self.time[0]]) if self.time else self.point.t
+        values = {c.vr: float(v) for c, v in zip(self.layout.cols, x) if c.role != "time"}
+        return Point(t, values, self.point.label)
+
+    def fun(self, delta: np.ndarray) -> np.ndarray:
+        return np.asarray(self.ev.evaluate(self.at(delta), self.row_vrs), dtype=float)
+
+    def directional(self, seed: np.ndarray) -> np.ndarray:
+        return np.asarray(self.ev.directional(self.base, self.row_vrs, self.dd_vrs,
+                                              np.asarray(seed, dtype=float)[self.dd_idx]), float)
+
+    def adjoint(self, v: np.ndarray) -> np.ndarray:
+        out = np.full(len(self.layout.cols), np.nan)
+        out[self.dd_idx] = self.ev.adjoint(self.base, self.row_vrs, self.dd_vrs,
+                                           np.asarray(v, dtype=float))
+        return out
+
+
+# ------------------------------------------------------------------------------- the survey
+
+def survey(ctx: ProbeContext, settings: Settings = Settings()) -> Survey:
+    """The Jacobian measured at every sampling point, once per FMU (memoised in ctx.facts)."""
+    memo = ctx.facts.get(FACT)
+    if isinstance(memo, Survey):
+        return memo
+    result = run_survey(ctx, settings)
+    ctx.facts[FACT] = result
+    _publish_jacobian(ctx, result)
+    return result
+
+
+def run_survey(ctx: ProbeContext, settings: Settings) -> Survey:
+    """The survey itself, without the memo (the benchmark runs it with other settings)."""
+    layout, reason = build_layout(ctx)
+    if layout is None or ctx.dae is None:
+        failure = ctx.facts.get("dae_error")
+        return Survey(None, reason or "DAE mode could not be started" + (
+            f" ({failure})" if failure else ""))
+    me = ctx.model.model_exchange if ctx.model is not None else None
+    use = settings.use_derivatives and me is not None
+    result = Survey(layout, directional=bool(use and me.flag("providesDirectionalDerivatives")),
+                    adjoint=bool(use and me.flag("providesAdjointDerivatives")))
+    colouring = (col.colour_columns(layout.pattern) if settings.coloured
+                 else col.one_per_group(layout.pattern))
+    row_colouring = (col.colour_rows(layout.pattern) if settings.coloured
+                     else col.one_per_group(layout.pattern, rows=True))
+    rng = np.random.default_rng((ctx.seed, 740))
+    start_time = min((p.t for p in ctx.points), default=0.0)
+    for point in ctx.points:
+        measured = _measure_point(ctx.dae, layout, point, result, colouring, row_colouring,
+                                  rng, settings, start_time)
+        if measured is not None:
+            result.points.append(measured)
+    return result
+
+
+def _measure_point(ev, layout, point, result, colouring, row_colouring, rng, settings,
+                   start_time):
+    try:
+        at = _At(ev, layout, point)
+        # fmi3SetTime never goes below the start time (SM-06): it bounds the time column
+        lower = np.array([start_time if c.role == "time" else c.lower for c in layout.cols])
+        steps = numdiff.step_sizes(at.x, layout.nominal, method=settings.method, lower=lower,
+                                   upper=np.array([c.upper for c in layout.cols]))
+    except FmiError as exc:
+        result.failures.append(("evaluate", point, exc))
+        return None
+    for flag in ("directional", "adjoint"):
+        if result.probed or not getattr(result, flag):
+            continue
+        try:  # one probing call, so a refusal is reported once and not mid-measurement
+            (at.directional if flag == "directional" else at.adjoint)(
+                np.zeros(len(layout.cols) if flag == "directional" else len(layout.rows)))
+        except FmiError as exc:
+            result.failures.append((flag, point, exc))
+            setattr(result, flag, False)
+    result.probed = True
+    sources = col.Sources(at.fun, at.directional if result.directional else None,
+                          at.adjoint if result.adjoint else None, layout.dd_columns)
+    try:
+        entries = col.measure(sources, layout.pattern, colouring, steps, at.x, rng,
+                              row_colouring=row_colouring, method=settings.method,
+                              directions=settings.directions, suspicion=settings.suspicion,
+                              ulps=settings.ulps)
+    except FmiError as exc:  # e.g. a value out of range refused: nothing to compare here
+        result.failures.append(("evaluate", point, exc))
+        return None
+    return PointSurvey(point, at.x, entries)
+
+
+def _publish_jacobian(ctx: ProbeContext, s: Survey) -> None:
+    if s.layout is None:
+        return
+    observed: set[tuple[int, int]] = set()
+    for ps in s.points:
+        e = ps.entries
+        moved = ~e.zero & (e.fd != 0)
+        observed.update(zip(e.rows[moved].tolist(), e.cols[moved].tolist()))
+    p = s.layout.pattern
+    info = ctx.facts.setdefault("info", {})
+    info["jacobian"] = {
+        "rows": [r.name for r in s.layout.rows], "cols": [c.name for c in s.layout.cols],
+        "declared": [[i, j] for i, j in zip(p.rows.tolist(), p.cols.tolist())
+                     if s.layout.rows[i].explicit],
+        "observed": sorted([i, j] for i, j in observed)}
+
+
+def surveyed(ctx: ProbeContext, *, min_points: int = 1) -> Survey:
+    """The survey, or ProbeSkipped with the reason it has nothing to compare."""
+    s = survey(ctx)
+    if s.layout is None:
+        raise ProbeSkipped(s.reason)
+    if len(s.points) < min_points:
+        raise ProbeSkipped(f"{len(s.points)} sampling point(s) could be measured, "
+                           f"{min_points} needed")
+    return s
+
+
+def record_errors(ctx: ProbeContext, code: str, items: list[tuple[str, float, float]]) -> None:
+    info = ctx.facts.setdefault("info", {})
+    errors = info.setdefault("probe_errors", [])
+    items = sorted(items, key=lambda it: -(it[1] / it[2]) if it[2] > 0 else -np.inf)
+    room = max(0, MAX_PROBE_ERRORS - len(errors))
+    errors.extend({"rule": code, "entry": entry, "error": float(err), "tolerance": float(tol)}
+                  for entry, err, tol in items[:room])
+
+
+
+# ------------------------------------------------------------------------------ shared helpers
+
+def row_scale(layout: JacobianLayout, e: col.Entries, *,
+               declared_only: bool = False) -> np.ndarray:
+    """S_i = sum_j |J_ij| * nominal_j over the measured entries of each row, shape (m,)."""
+    weights = np.abs(np.nan_to_num(e.fd)) * layout.nominal[e.cols]
+    if declared_only:
+        weights = weights * e.declared
+    return np.bincount(e.rows, weights=weights, minlength=len(layout.rows))
+
+
+def point_evidence(layout: JacobianLayout, ps: PointSurvey, limit: int = 20) -> dict:
+    values = {c.name: float(v) for c, v in zip(layout.cols, ps.x) if c.role != "time"}
+    shown = dict(list(values.items())[:limit])
+    return {"label": ps.point.label, "t": float(ps.point.t), "values": shown}
+

@@ -1,0 +1,1 @@
+../FourBar/fourbar.h

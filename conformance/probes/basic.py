@@ -33,10 +33,6 @@ from .common import (
 from .sampling import Layout, _within
 from .session import Instance, PointNotSet
 
-# The helpers moved to common.py; these names stay for modules that imported them from here
-# (conformance/probes/simulation.py) until they import from .common.
-_layout, _manifest_location, _root_location = layout_of, manifest_location, root_location
-
 # ------------------------------------------------------------------- algebraic-not-settable
 
 

@@ -66,6 +66,38 @@ def _keep_worst(worst: dict, key, ratio: float, ps: PointSurvey, items: dict) ->
         worst[key] = _Worst(ratio, ps, items)
 
 
+def _compared(layout: JacobianLayout, e, which: str, *, rtol: float, margin: float,
+              ulps: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The FMU's values, |FMU - FD|, the tolerance, the FD error estimate and the scale of
+    every measured entry at one point (each of shape (nnz,))."""
+    fmu = e.dd if which == "dd" else e.adj
+    scale = row_scale(layout, e)[e.rows] / layout.nominal[e.cols]
+    err = e.error(ulps)
+    return fmu, np.abs(fmu - e.fd), margin * err + rtol * scale, err, scale
+
+
+def _closest(s: Survey, which: str, *, rtol: float, margin: float, ulps: float,
+             limit: int = 20) -> list[tuple[str, float, float]]:
+    """The entries that came closest to their tolerance (the report plots error against
+    tolerance for passing checks too): (entry, |FMU - FD|, tolerance), worst first."""
+    layout = s.layout
+    assert layout is not None
+    best: dict[tuple[int, int], tuple[float, float, float]] = {}
+    for ps in s.points:
+        e = ps.entries
+        if (e.dd if which == "dd" else e.adj) is None:
+            continue
+        fmu, diff, tol, _, _ = _compared(layout, e, which, rtol=rtol, margin=margin, ulps=ulps)
+        ok = np.isfinite(diff) & (tol > 0)
+        for k in np.flatnonzero(ok):
+            key = (int(e.rows[k]), int(e.cols[k]))
+            ratio = float(diff[k] / tol[k])
+            if key not in best or ratio > best[key][0]:
+                best[key] = (ratio, float(diff[k]), float(tol[k]))
+    ranked = sorted(best.items(), key=lambda kv: -kv[1][0])[:limit]
+    return [(layout.entry(i, j), d, t) for (i, j), (_, d, t) in ranked]
+
+
 def _mismatches(s: Survey, which: str, *, rtol: float, margin: float, ulps: float) -> dict:
     """Entries where the FMU's value (``dd`` or ``adj``) and the finite difference disagree."""
     layout = s.layout
@@ -73,11 +105,8 @@ def _mismatches(s: Survey, which: str, *, rtol: float, margin: float, ulps: floa
     worst: dict[tuple[int, int], _Worst] = {}
     for ps in s.points:
         e = ps.entries
-        fmu = e.dd if which == "dd" else e.adj
-        scale = row_scale(layout, e)[e.rows] / layout.nominal[e.cols]
-        err = e.error(ulps)
-        tol = margin * err + rtol * scale
-        diff = np.abs(fmu - e.fd)
+        fmu, diff, tol, err, scale = _compared(layout, e, which, rtol=rtol, margin=margin,
+                                               ulps=ulps)
         bad = np.isfinite(fmu) & np.isfinite(e.fd) & (diff > tol)  # non-finite: nan-or-inf
         if which == "adj":
             # An adjoint that equals a wrong directional derivative is the same fault, reported
@@ -137,7 +166,8 @@ def directional_derivative_mismatch(ctx: ProbeContext, *, rtol: float = 1e-5,
         raise ProbeSkipped("the FMU does not provide directional derivatives")
     yield from failures
     worst = _mismatches(s, "dd", rtol=rtol, margin=margin, ulps=ulps)
-    record_errors(ctx, "DAE740", _errors(worst, s.layout))
+    record_errors(ctx, "DAE740", _errors(worst, s.layout)
+                  or _closest(s, "dd", rtol=rtol, margin=margin, ulps=ulps))
     yield from _entry_violations(
         s, worst, "fmi3GetDirectionalDerivative gives {subject} that finite differences of the "
         "function do not confirm")
@@ -154,7 +184,8 @@ def adjoint_derivative_mismatch(ctx: ProbeContext, *, rtol: float = 1e-5, margin
         raise ProbeSkipped("the FMU does not provide adjoint derivatives")
     yield from failures
     worst = _mismatches(s, "adj", rtol=rtol, margin=margin, ulps=ulps)
-    record_errors(ctx, "DAE741", _errors(worst, s.layout))
+    record_errors(ctx, "DAE741", _errors(worst, s.layout)
+                  or _closest(s, "adj", rtol=rtol, margin=margin, ulps=ulps))
     yield from _entry_violations(
         s, worst, "fmi3GetAdjointDerivative gives {subject} that finite differences of the "
         "function do not confirm")

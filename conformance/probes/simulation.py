@@ -33,12 +33,11 @@ from typing import Any, Iterator
 import numpy as np
 
 from ..findings import Location, Violation, evidence
-from ..model import MODEL_DESCRIPTION
 from ..simulate import settings as st
 from ..simulate.compare import compare
 from ..simulate.settings import Settings, Trajectory
 from .api import FmiError, ProbeContext, ProbeSkipped
-from .sampling import Layout
+from .common import layout_of, root_location
 
 log = logging.getLogger(__name__)
 
@@ -49,23 +48,14 @@ SAME_CONDITION = 10.0   # dg/dw no worse than this factor of its start: not "alo
 
 # ------------------------------------------------------------------------------- helpers
 
-def _layout(ctx: ProbeContext) -> Layout:
-    return ctx.facts["layout"]  # type: ignore[return-value]
-
-
-def _root_location(ctx: ProbeContext) -> Location:
-    m = ctx.manifest
-    return Location(file=m.file, line=m.root_line) if m else Location(file=MODEL_DESCRIPTION)
-
-
 def _algebraic_location(ctx: ProbeContext, name: str | None) -> Location:
     """The manifest's AlgebraicVariable element of the variable called ``name``."""
-    layout, m = _layout(ctx), ctx.manifest
+    layout, m = layout_of(ctx), ctx.manifest
     vr = next((v for v in layout.algebraic if layout.name(v) == name), None)
     for ref in (m.algebraic if m is not None and vr is not None else ()):
         if ref.vr == vr:
             return Location(file=m.file, line=ref.line, path=ref.path)
-    return _root_location(ctx)
+    return root_location(ctx)
 
 
 # ------------------------------------------------------------------------------- the runs
@@ -83,7 +73,7 @@ def _settings(ctx: ProbeContext) -> Settings:
 
 
 def _stop(ctx: ProbeContext, settings: Settings) -> tuple[float, float]:
-    start = float(_layout(ctx).start_time)
+    start = float(layout_of(ctx).start_time)
     experiment = getattr(ctx.model, "default_experiment", None)
     default = getattr(experiment, "stop_time", None) if experiment is not None else None
     return start, settings.stop(start, default)
@@ -154,7 +144,7 @@ def _simulate(ctx: ProbeContext, mode: str, settings: Settings | None = None) ->
     settings = settings or _settings(ctx)
     if settings.mode not in (mode, "both"):
         raise ProbeSkipped(f"the simulation runs in {settings.mode.upper()} mode only")
-    layout = _layout(ctx)
+    layout = layout_of(ctx)
     start, stop = _stop(ctx, settings)
     if mode == "dae":
         if len(layout.residuals) != len(layout.algebraic):
@@ -214,7 +204,7 @@ def _both(ctx: ProbeContext) -> list[Trajectory]:
 def _points_fail(ctx: ProbeContext, mode: str) -> bool:
     """Whether evaluating at the sampled points already fails or gives NaN/Inf in ``mode``:
     then evaluation-failed, nan-or-inf or enable-handshake report it, not the simulation."""
-    layout = _layout(ctx)
+    layout = layout_of(ctx)
     inst = ctx.dae if mode == "dae" else ctx.ode
     if inst is None:
         return False
@@ -250,12 +240,12 @@ def simulation_failed(ctx: ProbeContext, **options: Any) -> Iterator[Violation]:
             yield Violation(
                 "no consistent initial point in DAE mode: from the FMU's initial values, "
                 f"Newton's method with the FMU's dg/dw fails ({traj.message})",
-                _root_location(ctx), _run_evidence(traj, init=traj.init), subject="dae:init")
+                root_location(ctx), _run_evidence(traj, init=traj.init), subject="dae:init")
         elif traj.status == st.SOLVER:
             solver = "IDA" if traj.mode == "dae" else "CVODE"
             yield Violation(
                 f"{solver} cannot integrate the FMU in {traj.mode.upper()} mode: "
-                f"{traj.message} (stop time {traj.stop_time:g})", _root_location(ctx),
+                f"{traj.message} (stop time {traj.stop_time:g})", root_location(ctx),
                 _run_evidence(traj, init=traj.init), subject=f"{traj.mode}:solver")
 
 
@@ -285,7 +275,7 @@ def evaluation_failed_during_simulation(ctx: ProbeContext) -> Iterator[Violation
             continue
         yield Violation(
             f"the FMU failed during the {traj.mode.upper()}-mode simulation at t = "
-            f"{traj.event.get('t', traj.t_end):.9g}: {traj.message}", _root_location(ctx),
+            f"{traj.event.get('t', traj.t_end):.9g}: {traj.message}", root_location(ctx),
             _run_evidence(traj, recovered=traj.recovered),
             subject=f"{traj.mode}:{traj.event.get('call', '')}")
 
@@ -297,12 +287,12 @@ def simulation_budget_exceeded(ctx: ProbeContext) -> Iterator[Violation]:
             continue
         yield Violation(
             f"the {traj.mode.upper()}-mode simulation was stopped at t = {traj.t_end:.9g} of "
-            f"{traj.stop_time:g}: {traj.message}", _root_location(ctx),
+            f"{traj.stop_time:g}: {traj.message}", root_location(ctx),
             _run_evidence(traj), subject=f"{traj.mode}:{traj.event.get('limit', '')}")
 
 
 def _ode(ctx: ProbeContext) -> Trajectory:
-    if _layout(ctx).enable_status != "ok":
+    if layout_of(ctx).enable_status != "ok":
         raise ProbeSkipped("the FMU has no usable enable parameter, hence no ODE mode")
     return _run(ctx, "ode")
 
@@ -342,7 +332,7 @@ def ode_dae_trajectory_mismatch(ctx: ProbeContext, *, factor: float = 100.0,
     yield Violation(
         f"DAE mode and ODE mode give different trajectories: {worst['variable']} differs by "
         f"{worst['gap']:.3g} tolerance units at t = {worst['t']:.9g} (limit {factor:g}), and "
-        "not less with tighter tolerances", _root_location(ctx),
+        "not less with tighter tolerances", root_location(ctx),
         evidence(worst=worst, gaps=found.gaps, limit=factor, rtol=dae.rtol,
                  gap_unit="rtol * max(|dae|, |ode|) + atol_i, atol_i = atol_factor * rtol * "
                           "nominal_i", compared_times=found.compared_times,

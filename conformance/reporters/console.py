@@ -3,18 +3,25 @@ from __future__ import annotations
 
 from ..catalogue import Catalogue
 from ..drafts import DRAFT_LABELS
-from ..findings import Finding, FmuReport, Report, Severity
+from ..findings import Finding, FmuReport, Report, Severity, thaw
 
 _COLOURS = {Severity.ERROR: "\033[1;31m", Severity.WARNING: "\033[1;33m",
             Severity.INFO: "\033[1;36m"}
 _BOLD, _DIM, _RESET = "\033[1m", "\033[2m", "\033[0m"
 
 
+# Findings of these stages are measurements: their evidence is shown, not only in JSON.
+EVIDENCE_STAGES = ("probe", "simulation")
+EVIDENCE_ITEMS = 12       # at most this many evidence items per finding
+EVIDENCE_WIDTH = 100      # long values are cut here
+
+
 def render(report: Report, catalogue: Catalogue | None = None, *, color: bool = False,
            **_: object) -> str:
+    measured = {r.code for r in catalogue or () if r.stage in EVIDENCE_STAGES}
     out: list[str] = []
     for fmu in report.fmus:
-        out.extend(_fmu(fmu, color))
+        out.extend(_fmu(fmu, color, measured))
     errors = sum(f.count(Severity.ERROR) for f in report.fmus)
     warnings = sum(f.count(Severity.WARNING) for f in report.fmus)
     out.append(f"checked {len(report.fmus)} FMU{'s' if len(report.fmus) != 1 else ''}: "
@@ -30,10 +37,12 @@ def _paint(text: str, code: str, color: bool) -> str:
     return f"{code}{text}{_RESET}" if color else text
 
 
-def _fmu(fmu: FmuReport, color: bool) -> list[str]:
+def _fmu(fmu: FmuReport, color: bool, measured: set[str]) -> list[str]:
     lines: list[str] = []
     for finding in fmu.findings:
         lines.extend(_finding(fmu, finding, color))
+        if finding.code in measured and finding.evidence:
+            lines.extend(_evidence(finding, color))
         lines.append("")
     if fmu.draft:
         draft = DRAFT_LABELS.get(fmu.draft, fmu.draft)
@@ -64,3 +73,27 @@ def _finding(fmu: FmuReport, f: Finding, color: bool) -> list[str]:
     else:
         lines.append(f"  {_paint('-->', _DIM, color)} {fmu.path}")
     return lines
+
+
+def _evidence(f: Finding, color: bool) -> list[str]:
+    """The numbers behind a measured finding, one ``key: value`` per line."""
+    items = thaw(f.evidence)
+    lines = [f"  {_paint('= evidence:', _DIM, color)}"]
+    for key, value in list(items.items())[:EVIDENCE_ITEMS]:
+        lines.append(f"      {key}: {_short(value)}")
+    if len(items) > EVIDENCE_ITEMS:
+        lines.append(f"      … {len(items) - EVIDENCE_ITEMS} more in the JSON report")
+    return lines
+
+
+def _short(value: object, nested: bool = False) -> str:
+    if isinstance(value, float):
+        text = f"{value:.6g}"
+    elif isinstance(value, dict):
+        text = ", ".join(f"{k}={_short(v, True)}" for k, v in value.items())
+        text = f"({text})" if nested else text
+    elif isinstance(value, list):
+        text = "[" + ", ".join(_short(v, True) for v in value) + "]"
+    else:
+        text = str(value)
+    return text if len(text) <= EVIDENCE_WIDTH else text[:EVIDENCE_WIDTH - 1] + "…"

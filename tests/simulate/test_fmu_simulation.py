@@ -19,8 +19,12 @@ def _codes(result) -> set[str]:
     return {f.code for f in result.report.findings}
 
 
-@pytest.mark.parametrize("rtol", [1e-4, 1e-6])
-def test_robertson_in_dae_mode_to_4e10_matches_the_reference(rtol):
+# Worst |error| / (rtol |ref| + atol) measured over the four reference times: 0.98 at rtol 1e-4,
+# 0.51 at 1e-5, 1.01 at 1e-6, 1.44 at 1e-7, 1.88 at 1e-8. IDA controls the local error; the
+# global error at tight tolerances accumulates to a small multiple of the tolerance.
+@pytest.mark.parametrize(("rtol", "allowed"), [(1e-4, 1.0), (1e-5, 1.0), (1e-6, 1.5),
+                                               (1e-8, 2.0)])
+def test_robertson_in_dae_mode_to_4e10_matches_the_reference(rtol, allowed):
     settings = Settings(mode="dae", rtol=rtol, stop_time=4e10,
                         output_times=tuple(ROBERTSON_REFERENCE))
     result = simulate_fmu(build_scene("Robertson"), settings)
@@ -31,8 +35,7 @@ def test_robertson_in_dae_mode_to_4e10_matches_the_reference(rtol):
     for t, ref in ROBERTSON_REFERENCE.items():
         ref = np.array(ref)
         error = np.abs(traj.values[traj.times.index(t)] - ref)
-        # in units of the requested tolerance; the global error of BDF is a small multiple
-        assert np.all(error <= 2 * (rtol * np.abs(ref) + np.array(traj.atol))), (t, error)
+        assert np.all(error <= allowed * (rtol * np.abs(ref) + np.array(traj.atol))), (t, error)
 
 
 @pytest.mark.parametrize("scene", ["SimpleDAE", "HelloWorldDAE"])

@@ -32,12 +32,9 @@ import argparse
 import ctypes
 import datetime as dt
 import json
-import shutil
 import statistics
 import sys
-import tempfile
 import time
-import zipfile
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable, Sequence
@@ -45,8 +42,9 @@ from typing import Any, Callable, Sequence
 import numpy as np
 from lxml import etree
 
+from bench.inprocess import LoadedFmu
 from bench.static_bench import machine_info
-from conformance.manifest import MANIFEST, read_manifest
+from conformance.manifest import read_manifest
 from conformance.model import read_model_description
 from conformance.probes import colouring as col
 from conformance.probes import derivatives as D
@@ -60,19 +58,13 @@ SCENES = ("SimpleDAE", "Robertson", "HelloWorldDAE", "Chain")
 RULES = ("DAE740", "DAE741", "DAE742", "DAE743", "DAE744", "DAE745", "DAE746")
 
 
-class Fmu:
-    """A scene FMU loaded in process with lsdae's own session, in DAE mode."""
+class Fmu(LoadedFmu):
+    """A scene FMU loaded in process with lsdae's own session, with an instance in DAE mode."""
 
     def __init__(self, path: Path):
-        from conformance.probes.session import CallRecord, Layout, Library, start_instance
+        from conformance.probes.session import start_instance
 
-        self.dir = tempfile.mkdtemp(prefix="lsdae-bench-")
-        with zipfile.ZipFile(path) as zf:
-            zf.extractall(self.dir)
-        self.model = read_model_description(etree.parse(f"{self.dir}/modelDescription.xml"))
-        self.manifest = read_manifest(etree.parse(f"{self.dir}/{MANIFEST}"), draft="alpha1")
-        self.layout = Layout.build(self.model, self.manifest)
-        self.library = Library(self.dir, self.layout, CallRecord())
+        super().__init__(path)
         self.dae = start_instance(self.library, "dae")
 
     def context(self, seed: int = 0, points: int | None = None) -> ProbeContext:
@@ -83,10 +75,6 @@ class Fmu:
         pts = [start, *near_points(start, self.layout, rng)][:points]
         return ProbeContext(self.model, self.manifest, "alpha1", seed, rng, pts, self.dae,
                             None, lambda mode: None, {})
-
-    def close(self) -> None:
-        self.library.free_all()
-        shutil.rmtree(self.dir, ignore_errors=True)
 
 
 def scaled_errors(survey: J.Survey, ulps: float = numdiff.DEFAULT_ULPS) -> tuple[float, float]:

@@ -37,12 +37,9 @@ import argparse
 import datetime as dt
 import json
 import math
-import shutil
 import statistics
 import sys
-import tempfile
 import time
-import zipfile
 from collections.abc import Sequence
 from dataclasses import dataclass
 from itertools import pairwise
@@ -50,11 +47,9 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from lxml import etree
 
+from bench.inprocess import LoadedFmu
 from bench.static_bench import machine_info
-from conformance.manifest import MANIFEST, read_manifest
-from conformance.model import read_model_description
 from tests.scenes.build import build_scene
 
 SCENES = ("SimpleDAE", "Robertson", "Akzo")
@@ -135,23 +130,8 @@ REFERENCES = {"SimpleDAE": simple_dae_reference, "Robertson": robertson_referenc
 
 # ------------------------------------------------------------------------------- the FMUs
 
-class LoadedFmu:
+class SceneFmu(LoadedFmu):
     """A scene FMU loaded in process with lsdae's session, ready to simulate in either mode."""
-
-    def __init__(self, path: Path):
-        from conformance.probes.session import CallRecord, Layout, Library
-
-        self.dir = tempfile.mkdtemp(prefix="lsdae-simbench-")
-        with zipfile.ZipFile(path) as zf:
-            zf.extractall(self.dir)
-        self.model = read_model_description(etree.parse(f"{self.dir}/modelDescription.xml"))
-        self.manifest = read_manifest(etree.parse(f"{self.dir}/{MANIFEST}"), draft="alpha1")
-        self.layout = Layout.build(self.model, self.manifest)
-        self.library = Library(self.dir, self.layout, CallRecord())
-
-    def nominal(self, name: str) -> float:
-        vr = next(vr for vr, n in self.layout.names.items() if n == name)
-        return float(self.layout.scale(vr))
 
     def simulate(self, mode: str, settings: Any, stop: float) -> tuple[Any, float]:
         """One run on a fresh instance: (Trajectory, wall seconds of the integration, from the
@@ -179,10 +159,6 @@ class LoadedFmu:
             return traj, time.perf_counter() - start
         finally:
             inst.free()
-
-    def close(self) -> None:
-        self.library.free_all()
-        shutil.rmtree(self.dir, ignore_errors=True)
 
 
 def settings_for(rtol: float, reference: Reference) -> Any:
@@ -218,7 +194,7 @@ def errors(traj: Any, reference: Reference, nominal: dict[str, float]
 
 def bench_scene(scene: str, runs: int, rtols: Sequence[float]) -> tuple[list[dict], Reference]:
     reference = REFERENCES[scene]()
-    fmu = LoadedFmu(build_scene(scene))
+    fmu = SceneFmu(build_scene(scene))
     rows = []
     try:
         nominal = {name: fmu.nominal(name) for name in reference.values}

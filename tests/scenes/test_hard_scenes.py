@@ -57,9 +57,9 @@ def _code(name: str) -> str:
 def _simulator():
     pytest.importorskip("sksundae")
     pytest.importorskip("conformance.simulate.dae")
-    from bench.sim_bench import LoadedFmu
+    from bench.sim_bench import SceneFmu
 
-    return LoadedFmu
+    return SceneFmu
 
 
 @pytest.fixture

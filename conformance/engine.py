@@ -31,6 +31,7 @@ log = logging.getLogger(__name__)
 
 STATIC_STAGES = ("static",)
 GROUP_SHOWN = 5
+START_TAG_LOOKBACK = 200  # lines searched upwards for the '<' that starts a tag
 
 
 @dataclass(frozen=True)
@@ -142,13 +143,24 @@ class _LineCache:
         self.lines: dict[str, list[bytes]] = {}
 
     def with_snippet(self, loc: Location) -> Location:
+        """Add the source line; move a line that ends a multi-line start tag to its start.
+
+        libxml2 records the line where a start tag *ends*. A raw '<' cannot occur in attribute
+        text, so the nearest line at or above it that holds a '<' is where the tag begins.
+        Done here, for the few lines findings point at, not for every element when parsing.
+        """
         if not loc.file or not loc.line or loc.file not in self.texts:
             return loc
         lines = self.lines.setdefault(loc.file, self.texts[loc.file].split(b"\n"))
         if loc.line > len(lines):
             return loc
-        text = lines[loc.line - 1].decode("utf-8", "replace").rstrip()
-        return replace(loc, snippet=text[:240])
+        line = loc.line
+        for above in range(line, max(line - START_TAG_LOOKBACK, 0), -1):
+            if b"<" in lines[above - 1]:
+                line = above
+                break
+        text = lines[line - 1].decode("utf-8", "replace").rstrip()
+        return replace(loc, line=line, snippet=text[:240])
 
 
 def check_fmu(path: Path, *, options: EngineOptions = EngineOptions(),

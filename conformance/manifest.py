@@ -9,6 +9,7 @@ The shape itself is reported by the draft rules; the semantic rules then run on 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 from typing import NamedTuple
 
 from lxml import etree
@@ -55,16 +56,26 @@ class Manifest:
     def enable(self) -> VrRef | None:
         return self.enables[0] if self.enables else None
 
+    @cached_property
+    def _by_kind(self) -> dict[str, tuple[Unknown, ...]]:
+        kinds: dict[str, list[Unknown]] = {}
+        for u in self.structure:
+            kinds.setdefault(u.kind, []).append(u)
+        return {k: tuple(v) for k, v in kinds.items()}
+
     @property
     def residuals(self) -> tuple[Unknown, ...]:
-        return tuple(u for u in self.structure if u.kind == "Residual")
+        return self._by_kind.get("Residual", ())
 
     def unknowns(self, kind: str) -> tuple[Unknown, ...]:
-        return tuple(u for u in self.structure if u.kind == kind)
+        return self._by_kind.get(kind, ())
 
 
 def _local(el: etree._Element) -> str:
-    return etree.QName(el).localname if isinstance(el.tag, str) else ""
+    tag = el.tag
+    if not isinstance(tag, str):
+        return ""
+    return tag if tag[0] != "{" else etree.QName(el).localname
 
 
 def _elements(el: etree._Element | None) -> list[etree._Element]:

@@ -179,10 +179,11 @@ def default_initial(causality: str, variability: str) -> str | None:
 
 
 def parse_uint(text: str | None) -> int | None:
+    """An unsigned integer attribute, or None (str.isdigit alone admits '²', which int refuses)."""
     if text is None:
         return None
     text = text.strip()
-    return int(text) if text.isdigit() else None
+    return int(text) if text.isascii() and text.isdigit() else None
 
 
 def parse_unknown(el: etree._Element, kind: str, file: str, path: str,
@@ -207,7 +208,10 @@ def parse_unknown(el: etree._Element, kind: str, file: str, path: str,
             deps = tuple(values)
     kinds_text = a.get("dependenciesKind")
     kinds = tuple(kinds_text.split()) if kinds_text is not None else None
-    return Unknown(kind=kind, vr=parse_uint(a.get("valueReference")), dependencies=deps,
+    raw_vr = a.get("valueReference")
+    vr = int(raw_vr) if raw_vr is not None and raw_vr.isascii() and raw_vr.isdigit() \
+        else parse_uint(raw_vr)
+    return Unknown(kind=kind, vr=vr, dependencies=deps,
                    dependencies_kind=kinds, line=el.sourceline, file=file, path=path,
                    bad_tokens=tuple(bad), index=a.get("index"))
 

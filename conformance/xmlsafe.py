@@ -114,7 +114,6 @@ def _parse(
         unsafe = _doctype_violations(tree, data, where)
         if unsafe:
             return None, violations + unsafe
-        _start_tag_lines(root, data)
         return tree, violations
     if not problems:
         return None, violations + [Violation(
@@ -314,39 +313,3 @@ def _position(node: etree._Element, tag: str | None) -> int:
         return 1 + sum(1 for s in node.itersiblings(preceding=True) if type(s) is type(node))
     return 1 + sum(1 for _ in node.itersiblings(tag, preceding=True))
 
-
-_LOOKBACK = 200
-_MAX_SETTABLE_LINE = 65535  # libxml2 keeps element lines in 16 bits; lxml refuses larger values
-
-
-def _start_tag_lines(root: etree._Element, data: bytes) -> None:
-    """Point every element's ``sourceline`` at the line where its start tag begins.
-
-    libxml2 records the line where a start tag *ends*, so a root element whose attributes span
-    eight lines would be reported on its last line. Findings should point at ``<Element``.
-    """
-    lines = data.split(b"\n")
-    for el in root.iter(etree.Element):
-        line = el.sourceline
-        # A raw '<' cannot occur in attribute text, so a line with one holds a tag's start:
-        # the common case of a start tag on a single line, decided without building names.
-        if not line or line > _MAX_SETTABLE_LINE or line > len(lines) or b"<" in lines[line - 1]:
-            continue
-        qname = etree.QName(el).localname
-        if el.prefix:
-            qname = f"{el.prefix}:{qname}"
-        token = b"<" + qname.encode("utf-8")
-        for candidate in range(min(line, len(lines)) - 1, max(line - _LOOKBACK, 1) - 1, -1):
-            if _has_tag(lines[candidate - 1], token):
-                el.sourceline = candidate
-                break
-
-
-def _has_tag(line: bytes, token: bytes) -> bool:
-    start = line.find(token)
-    while start >= 0:
-        end = start + len(token)
-        if end == len(line) or line[end:end + 1] in b" \t\r\n/>":
-            return True
-        start = line.find(token, end)
-    return False

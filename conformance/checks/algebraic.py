@@ -13,12 +13,13 @@ The helpers :func:`continuous_states` and :func:`element_count` are shared with 
 from __future__ import annotations
 
 import logging
-from collections.abc import Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 
 from ..context import Check, CheckContext
 from ..findings import Location, Violation, evidence
 from ..manifest import Manifest, VrRef
 from ..model import ModelDescription, Unknown, Variable, parse_uint
+from .listing import classified, facts, first_listings, repeats
 
 log = logging.getLogger(__name__)
 
@@ -93,31 +94,18 @@ def algebraic_problem(var: Variable, *, states: frozenset[int],
     return None
 
 
-def _listed(model: ModelDescription, manifest: Manifest) -> Iterator[tuple[VrRef, Variable]]:
-    """The first listing of each resolvable algebraic variable, with its variable."""
-    seen: set[int] = set()
-    for ref in manifest.algebraic:
-        if ref.vr is None or ref.vr not in model.by_vr or ref.vr in seen:
-            continue
-        seen.add(ref.vr)
-        yield ref, model.by_vr[ref.vr]
-
-
 def _classified(ctx: CheckContext, wanted: str) -> Iterator[tuple[VrRef, Variable]]:
     model, manifest = ctx.model, ctx.manifest
     if model is None or manifest is None:
         return
 
-    def classify() -> dict[str | None, list[tuple[VrRef, Variable]]]:
+    def classifier() -> Callable[[Variable], str | None]:
         states = continuous_states(model, manifest)
         residuals = resolved_vrs(model, manifest.residuals)
-        classes: dict[str | None, list[tuple[VrRef, Variable]]] = {}
-        for ref, var in _listed(model, manifest):
-            problem = algebraic_problem(var, states=states, residuals=residuals)
-            classes.setdefault(problem, []).append((ref, var))
-        return classes
+        return lambda var: algebraic_problem(var, states=states, residuals=residuals)
 
-    yield from ctx.memo("algebraic-classes", classify).get(wanted, ())
+    yield from classified(ctx, "algebraic-classes", wanted,
+                          lambda: first_listings(manifest.algebraic, model), classifier)
 
 
 def _at_ref(ctx: CheckContext, ref: VrRef) -> Location:
@@ -127,11 +115,6 @@ def _at_ref(ctx: CheckContext, ref: VrRef) -> Location:
 
 def _at_var(ctx: CheckContext, var: Variable) -> Location:
     return Location(file=ctx.model.file if ctx.model else None, line=var.line, path=var.path)
-
-
-def _facts(var: Variable, ref: VrRef) -> dict:
-    return {"value_reference": var.vr, "type": var.type, "causality": var.causality,
-            "variability": var.variability, "listed_at_line": ref.line}
 
 
 def algebraic_unknown_vr(ctx: CheckContext) -> Iterator[Violation]:
@@ -159,19 +142,12 @@ def algebraic_duplicate(ctx: CheckContext) -> Iterator[Violation]:
     """DAE-20 (derived): no algebraic variable is listed twice."""
     if ctx.model is None or ctx.manifest is None:
         return
-    first: dict[int, VrRef] = {}
-    for ref in ctx.manifest.algebraic:
-        if ref.vr is None or ref.vr not in ctx.model.by_vr:
-            continue  # reported by algebraic-unknown-vr
-        if ref.vr not in first:
-            first[ref.vr] = ref
-            continue
+    for ref, first, var in repeats(ctx.manifest.algebraic, ctx.model):
         yield Violation(
             "algebraic variable {subject} is listed more than once in <AlgebraicVariables>; "
             "list each algebraic variable once",
-            _at_ref(ctx, ref),
-            evidence(value_reference=ref.vr, first_listed_at_line=first[ref.vr].line),
-            subject=ctx.model.by_vr[ref.vr].name)
+            _at_ref(ctx, ref), evidence(value_reference=ref.vr, first_listed_at_line=first.line),
+            subject=var.name)
 
 
 def algebraic_not_float(ctx: CheckContext) -> Iterator[Violation]:
@@ -181,7 +157,7 @@ def algebraic_not_float(ctx: CheckContext) -> Iterator[Violation]:
             "algebraic variable {subject} is not a Float32 or Float64; the importer sets "
             "algebraic variables with fmi3SetFloat64/32 and iterates on them, so list only "
             "floating-point variables",
-            _at_var(ctx, var), evidence(_facts(var, ref)), subject=var.name)
+            _at_var(ctx, var), evidence(facts(var, ref)), subject=var.name)
 
 
 def algebraic_not_continuous(ctx: CheckContext) -> Iterator[Violation]:
@@ -191,7 +167,7 @@ def algebraic_not_continuous(ctx: CheckContext) -> Iterator[Violation]:
             "algebraic variable {subject} is not continuous; the importer changes it at every "
             "solver iteration in Continuous-Time Mode, so declare variability=\"continuous\" "
             "or remove it from <AlgebraicVariables>",
-            _at_var(ctx, var), evidence(_facts(var, ref)), subject=var.name)
+            _at_var(ctx, var), evidence(facts(var, ref)), subject=var.name)
 
 
 def algebraic_is_state_or_derivative(ctx: CheckContext) -> Iterator[Violation]:
@@ -201,7 +177,7 @@ def algebraic_is_state_or_derivative(ctx: CheckContext) -> Iterator[Violation]:
         yield Violation(
             "algebraic variable {subject} is a continuous state or a state derivative, which "
             "the integrator owns; list only variables that the residuals determine",
-            _at_ref(ctx, ref), evidence(_facts(var, ref), role=role,
+            _at_ref(ctx, ref), evidence(facts(var, ref), role=role,
                                         derivative_of=var.derivative), subject=var.name)
 
 
@@ -212,7 +188,7 @@ def algebraic_is_input_or_parameter(ctx: CheckContext) -> Iterator[Violation]:
             "algebraic variable {subject} is an input, a parameter or the independent "
             "variable, a known that the environment provides; list only local or output "
             "variables that the residuals determine",
-            _at_ref(ctx, ref), evidence(_facts(var, ref)), subject=var.name)
+            _at_ref(ctx, ref), evidence(facts(var, ref)), subject=var.name)
 
 
 def algebraic_is_residual(ctx: CheckContext) -> Iterator[Violation]:
@@ -222,7 +198,7 @@ def algebraic_is_residual(ctx: CheckContext) -> Iterator[Violation]:
             "algebraic variable {subject} is also listed as a Residual; an algebraic variable "
             "is an unknown the importer sets and a residual a value the FMU computes, so use "
             "two different variables",
-            _at_ref(ctx, ref), evidence(_facts(var, ref)), subject=var.name)
+            _at_ref(ctx, ref), evidence(facts(var, ref)), subject=var.name)
 
 
 CHECKS: dict[str, Check] = {

@@ -15,13 +15,14 @@ Legacy ``<Residual><Formulation/>...</Residual>`` elements arrive here as one Re
 from __future__ import annotations
 
 import logging
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 
 from ..context import Check, CheckContext
 from ..findings import Location, Violation, evidence
-from ..manifest import Manifest, VrRef
-from ..model import ModelDescription, Unknown, Variable
+from ..manifest import VrRef
+from ..model import Unknown, Variable
 from .algebraic import continuous_states, element_count, resolved_vrs
+from .listing import classified, facts, first_listings, repeats
 
 log = logging.getLogger(__name__)
 
@@ -43,40 +44,25 @@ def residual_problem(var: Variable, *, states: frozenset[int]) -> str | None:
     return None
 
 
-def _listed(model: ModelDescription, manifest: Manifest) -> Iterator[tuple[Unknown, Variable]]:
-    """The first listing of each resolvable residual that is not also an algebraic variable."""
-    algebraic = resolved_vrs(model, manifest.algebraic)
-    seen: set[int] = set()
-    for res in manifest.residuals:
-        if res.vr is None or res.vr not in model.by_vr or res.vr in seen:
-            continue
-        seen.add(res.vr)
-        if res.vr not in algebraic:  # else the algebraic rules explain it
-            yield res, model.by_vr[res.vr]
-
-
 def _classified(ctx: CheckContext, wanted: str) -> Iterator[tuple[Unknown, Variable]]:
     model, manifest = ctx.model, ctx.manifest
     if model is None or manifest is None:
         return
 
-    def classify() -> dict[str | None, list[tuple[Unknown, Variable]]]:
-        states = continuous_states(model, manifest)
-        classes: dict[str | None, list[tuple[Unknown, Variable]]] = {}
-        for res, var in _listed(model, manifest):
-            classes.setdefault(residual_problem(var, states=states), []).append((res, var))
-        return classes
+    def listed() -> Iterator[tuple[Unknown, Variable]]:
+        algebraic = resolved_vrs(model, manifest.algebraic)  # those the algebraic rules explain
+        return ((res, var) for res, var in first_listings(manifest.residuals, model)
+                if res.vr not in algebraic)
 
-    yield from ctx.memo("residual-classes", classify).get(wanted, ())
+    def classifier() -> Callable[[Variable], str | None]:
+        states = continuous_states(model, manifest)
+        return lambda var: residual_problem(var, states=states)
+
+    yield from classified(ctx, "residual-classes", wanted, listed, classifier)
 
 
 def _at(res: Unknown) -> Location:
     return Location(file=res.file, line=res.line, path=res.path)
-
-
-def _facts(var: Variable, res: Unknown) -> dict:
-    return {"value_reference": var.vr, "type": var.type, "causality": var.causality,
-            "variability": var.variability, "listed_at_line": res.line}
 
 
 def residual_unknown_vr(ctx: CheckContext) -> Iterator[Violation]:
@@ -101,18 +87,12 @@ def residual_duplicate(ctx: CheckContext) -> Iterator[Violation]:
     """DAE-31: no two Residual elements name the same variable."""
     if ctx.model is None or ctx.manifest is None:
         return
-    first: dict[int, Unknown] = {}
-    for res in ctx.manifest.residuals:
-        if res.vr is None or res.vr not in ctx.model.by_vr:
-            continue  # reported by residual-unknown-vr
-        if res.vr not in first:
-            first[res.vr] = res
-            continue
+    for res, first, var in repeats(ctx.manifest.residuals, ctx.model):
         yield Violation(
             "residual {subject} is listed in more than one Residual element; list each "
             "residual once",
-            _at(res), evidence(value_reference=res.vr, first_listed_at_line=first[res.vr].line),
-            subject=ctx.model.by_vr[res.vr].name)
+            _at(res), evidence(value_reference=res.vr, first_listed_at_line=first.line),
+            subject=var.name)
 
 
 def residual_not_float_continuous(ctx: CheckContext) -> Iterator[Violation]:
@@ -123,7 +103,7 @@ def residual_not_float_continuous(ctx: CheckContext) -> Iterator[Violation]:
             "reads residuals with fmi3GetFloat64/32 at every solver iteration, so declare it "
             "as a continuous floating-point variable",
             Location(file=ctx.model.file if ctx.model else None, line=var.line, path=var.path),
-            evidence(_facts(var, res)), subject=var.name)
+            evidence(facts(var, res)), subject=var.name)
 
 
 def residual_is_state_derivative_or_input(ctx: CheckContext) -> Iterator[Violation]:
@@ -137,7 +117,7 @@ def residual_is_state_derivative_or_input(ctx: CheckContext) -> Iterator[Violati
             "residual {subject} is a continuous state, a state derivative, an input or the "
             "independent variable; a residual must be a local or output variable that the FMU "
             "computes from the algebraic variables",
-            _at(res), evidence(_facts(var, res), role=role), subject=var.name)
+            _at(res), evidence(facts(var, res), role=role), subject=var.name)
 
 
 def residual_count_mismatch(ctx: CheckContext) -> Iterator[Violation]:

@@ -72,3 +72,25 @@ def test_report_is_deterministic(tmp_path):
     a = check_fmu(path, options=EngineOptions(probes=False))
     b = check_fmu(path, options=EngineOptions(probes=False))
     assert a == b
+
+
+def test_findings_point_at_the_line_where_a_multi_line_start_tag_begins(tmp_path):
+    # The scene's root element spreads its attributes over several lines; a header finding
+    # must point at `<fmiDAEManifest`, not at the line where libxml2 says the tag ends.
+    path = _scene(tmp_path, edit=[{"file": "manifest", "old": 'fmi-ls:fmi-ls-version="1.0.0-alpha.1"',
+                                   "new": 'fmi-ls:fmi-ls-version=""'}])
+    report = check_fmu(path, options=EngineOptions(probes=False))
+    [finding] = [f for f in report.findings if f.name == "ls-version-invalid"]
+    assert finding.location.snippet.lstrip().startswith("<fmiDAEManifest")
+    manifest = (path / "extra/org.fmi-standard.fmi-ls-dae/fmi-ls-manifest.xml").read_text()
+    assert manifest.splitlines()[finding.location.line - 1].lstrip().startswith("<fmiDAEManifest")
+
+
+def test_unicode_digits_in_value_references_are_findings_not_crashes(tmp_path):
+    # str.isdigit() accepts '²' but int() refuses it: such a value must read as "not an
+    # unsigned integer" (a schema and an unknown-vr finding), never as an internal error.
+    path = _scene(tmp_path, edit=[{"file": "manifest", "old": '<AlgebraicVariable valueReference="4"/>',
+                                   "new": '<AlgebraicVariable valueReference="\u00b2"/>'}])
+    report = check_fmu(path, options=EngineOptions(probes=False))
+    names = {f.name for f in report.findings}
+    assert "internal-error" not in names and "algebraic-unknown-vr" in names

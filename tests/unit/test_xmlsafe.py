@@ -30,8 +30,8 @@ def test_good_document_keeps_lines_and_comments() -> None:
     tree, violations = parse_xml(GOOD, file="m.xml")
     assert violations == [] and tree is not None
     root = tree.getroot()
-    # libxml2 records where a start tag ends; parse_xml moves it to where `<name` begins.
-    assert root.sourceline == 2
+    # libxml2 records where a start tag ends (the engine moves findings to where it begins).
+    assert root.sourceline == 3
     assert root.find("EnableDAEParameter").sourceline == 5
     assert any(isinstance(c, etree._Comment) for c in root)
 

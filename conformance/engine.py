@@ -175,7 +175,7 @@ def check_fmu(path: Path, *, options: EngineOptions = EngineOptions(),
         with _cyclic_gc_paused():
             _run(Path(path), options, catalogue, selection, collector, texts, state)
     except Exception as exc:  # a defect of ours: report it, keep everything found so far
-        log.exception("internal error while checking %s", path)
+        log.debug("internal error while checking %s", path, exc_info=True)
         collector.emit("internal-error", Violation(
             f"lsdae failed while checking this FMU: {type(exc).__name__}: {exc}",
             evidence=evidence(exception=type(exc).__name__)))
@@ -340,7 +340,7 @@ def _run_static(ctx: CheckContext, catalogue: Catalogue, selection: RuleSelectio
         try:
             collector.add(rule, list(check(ctx, **rule.option_values)))
         except Exception as exc:
-            log.exception("rule %s failed", rule.code)
+            log.debug("rule %s failed", rule.code, exc_info=True)
             collector.emit("internal-error", Violation(
                 f"rule {rule.code} {rule.name} failed: {type(exc).__name__}: {exc}",
                 evidence=evidence(rule=rule.code)))

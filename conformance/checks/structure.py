@@ -121,14 +121,18 @@ def dependency_unknown_vr(ctx: CheckContext) -> Iterator[Violation]:
     assert model is not None and manifest is not None
     # Tokens that are not unsigned integers are left to the schema stage: fmi3Unknown types
     # dependencies as a list of xs:unsignedInt in every draft's schema.
+    by_vr = model.by_vr
     for u in manifest.structure:
-        name = unknown_name(u, model)
-        for vr in dict.fromkeys(u.dependencies or ()):
-            if vr not in model.by_vr:
+        deps = u.dependencies
+        if not deps or all(vr in by_vr for vr in deps):
+            continue
+        for vr in dict.fromkeys(deps):
+            if vr not in by_vr:
                 yield Violation(
                     f"the dependencies of {_tag(u)} {{subject}} list valueReference {vr}, which "
                     "names no variable in modelDescription.xml",
-                    _loc(u), evidence(element=u.kind, value_reference=vr), subject=name)
+                    _loc(u), evidence(element=u.kind, value_reference=vr),
+                    subject=unknown_name(u, model))
 
 
 # --- dependency-not-allowed-known ------------------------------------------------------------
@@ -157,14 +161,19 @@ def dependency_not_allowed_known(ctx: CheckContext) -> Iterator[Violation]:
     model, manifest = ctx.model, ctx.manifest
     assert model is not None and manifest is not None
     roles = DaeRoles.of(model, manifest)
+    verdicts: dict[tuple[str, int], bool] = {}  # (element kind, known) -> allowed; few distinct
     for u in manifest.structure:
         if u.kind not in _CHECKED_KINDS:
             continue  # EventIndicator/ClockedState dependencies are for debugging (MS-12)
-        name = unknown_name(u, model)
         for vr in dict.fromkeys(u.dependencies or ()):
-            known = model.by_vr.get(vr)
-            if known is None or _allowed(u.kind, known, roles, ctx.draft):
+            key = (u.kind, vr)
+            ok = verdicts.get(key)
+            if ok is None:
+                known = model.by_vr.get(vr)
+                ok = verdicts[key] = known is None or _allowed(u.kind, known, roles, ctx.draft)
+            if ok:
                 continue
+            known = model.by_vr[vr]
             what = describe(known, roles)
             if u.kind == "InitialUnknown" and known.initial is not None:
                 what += f' with initial="{known.initial}"'
@@ -173,10 +182,14 @@ def dependency_not_allowed_known(ctx: CheckContext) -> Iterator[Violation]:
                 f"{_tag(u)} {{subject}} depends on '{known.name}', {what}; its allowed knowns "
                 f"are {allowed}",
                 _loc(u), evidence(element=u.kind, known=known.name, known_value_reference=vr,
-                                  known_is=what, allowed=allowed), subject=name)
+                                  known_is=what, allowed=allowed),
+                subject=unknown_name(u, model))
 
 
 # --- dependencies-kind-length / dependencies-kind-invalid ------------------------------------
+
+_ALWAYS_ALLOWED = frozenset({"dependent"})
+_KIND_SET = frozenset(KINDS)
 
 def dependencies_kind_length(ctx: CheckContext) -> Iterator[Violation]:
     """``dependenciesKind`` has one entry per ``dependencies`` entry (MS-30)."""
@@ -209,6 +222,10 @@ def dependencies_kind_invalid(ctx: CheckContext) -> Iterator[Violation]:
         if not u.dependencies_kind:
             continue
         var = model.by_vr.get(u.vr) if u.vr is not None else None
+        kinds = set(u.dependencies_kind)
+        if kinds <= _ALWAYS_ALLOWED or (u.kind != "InitialUnknown" and kinds <= _KIND_SET
+                                        and (var is None or var.is_float)):
+            continue  # the common case: nothing to report, decided without a loop
         name = unknown_name(u, model)
         for kind in dict.fromkeys(u.dependencies_kind):
             if kind not in KINDS:

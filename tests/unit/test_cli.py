@@ -113,3 +113,18 @@ def test_unwritable_output_is_a_clear_error(scene, tmp_path, capsys):
     assert main(["check", scene(), "--no-probes", "--format", "json",
                  "-o", str(blocker / "sub" / "r.json")]) == 2
     assert "cannot write" in capsys.readouterr().err
+
+
+def test_a_crashing_check_prints_no_traceback(scene, monkeypatch, capsys):
+    from conformance import engine
+    from conformance.checks import REGISTRY
+
+    def broken(ctx, **_):
+        raise ZeroDivisionError("boom")
+        yield  # pragma: no cover
+
+    monkeypatch.setitem(engine.REGISTRY, sorted(REGISTRY)[0], broken)
+    assert main(["check", scene(), "--no-probes", "--color", "never"]) == 1
+    captured = capsys.readouterr()
+    assert "internal-error" in captured.out
+    assert "Traceback" not in captured.err + captured.out

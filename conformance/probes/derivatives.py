@@ -156,21 +156,34 @@ def _failures(s: Survey, call: str) -> Iterator[Violation]:
 
 # ------------------------------------------------------------------------------- the probes
 
+def _against_fd(ctx: ProbeContext, s: Survey, which: str, code: str, *, rtol: float,
+                margin: float, ulps: float) -> tuple[list[Violation], dict]:
+    """The steps both derivative probes share: the FMU's refusals, the entries finite
+    differences do not confirm (recorded for the report's error plot), and their findings."""
+    call, fmi = _CALLS[which]
+    failures = list(_failures(s, call))
+    if not getattr(s, call) and not failures:
+        raise ProbeSkipped(f"the FMU does not provide {call} derivatives")
+    worst = _mismatches(s, which, rtol=rtol, margin=margin, ulps=ulps)
+    record_errors(ctx, code, _errors(worst, s.layout)
+                  or _closest(s, which, rtol=rtol, margin=margin, ulps=ulps))
+    found = list(_entry_violations(
+        s, worst, f"{fmi} gives {{subject}} that finite differences of the function do not "
+        "confirm"))
+    return failures + found, worst
+
+
+_CALLS = {"dd": ("directional", "fmi3GetDirectionalDerivative"),
+          "adj": ("adjoint", "fmi3GetAdjointDerivative")}
+
+
 def directional_derivative_mismatch(ctx: ProbeContext, *, rtol: float = 1e-5,
                                     margin: float = 10.0, ulps: float = 100.0
                                     ) -> Iterator[Violation]:
     """fmi3GetDirectionalDerivative against finite differences of the function (DAE-50)."""
-    s = surveyed(ctx)
-    failures = list(_failures(s, "directional"))
-    if not s.directional and not failures:
-        raise ProbeSkipped("the FMU does not provide directional derivatives")
-    yield from failures
-    worst = _mismatches(s, "dd", rtol=rtol, margin=margin, ulps=ulps)
-    record_errors(ctx, "DAE740", _errors(worst, s.layout)
-                  or _closest(s, "dd", rtol=rtol, margin=margin, ulps=ulps))
-    yield from _entry_violations(
-        s, worst, "fmi3GetDirectionalDerivative gives {subject} that finite differences of the "
-        "function do not confirm")
+    found, _ = _against_fd(ctx, surveyed(ctx), "dd", "DAE740", rtol=rtol, margin=margin,
+                           ulps=ulps)
+    yield from found
 
 
 def adjoint_derivative_mismatch(ctx: ProbeContext, *, rtol: float = 1e-5, margin: float = 10.0,
@@ -179,16 +192,8 @@ def adjoint_derivative_mismatch(ctx: ProbeContext, *, rtol: float = 1e-5, margin
     """fmi3GetAdjointDerivative against finite differences, and the dot-product test
     v(Js) = (vJ)s against the directional derivative (PD-06, DAE-50)."""
     s = surveyed(ctx)
-    failures = list(_failures(s, "adjoint"))
-    if not s.adjoint and not failures:
-        raise ProbeSkipped("the FMU does not provide adjoint derivatives")
-    yield from failures
-    worst = _mismatches(s, "adj", rtol=rtol, margin=margin, ulps=ulps)
-    record_errors(ctx, "DAE741", _errors(worst, s.layout)
-                  or _closest(s, "adj", rtol=rtol, margin=margin, ulps=ulps))
-    yield from _entry_violations(
-        s, worst, "fmi3GetAdjointDerivative gives {subject} that finite differences of the "
-        "function do not confirm")
+    found, worst = _against_fd(ctx, s, "adj", "DAE741", rtol=rtol, margin=margin, ulps=ulps)
+    yield from found
     if worst:
         return
     directional_ok = not _mismatches(s, "dd", rtol=1e-5, margin=10.0, ulps=ulps)

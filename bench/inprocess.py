@@ -20,7 +20,9 @@ class LoadedFmu:
     """The unpacked FMU, its model and manifest, the variable layout and the loaded library."""
 
     def __init__(self, path: Path, *, prefix: str = "lsdae-bench-"):
-        from conformance.probes.session import CallRecord, Layout, Library
+        from conformance.runtime.callrecord import CallRecord
+        from conformance.runtime.layout import Layout
+        from conformance.runtime.library import Library
 
         self.dir = tempfile.mkdtemp(prefix=prefix)
         with zipfile.ZipFile(path) as zf:

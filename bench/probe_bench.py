@@ -15,7 +15,7 @@ Two tables, side by side in one run, medians over ``--runs`` runs (calls do not 
    number of calls for every N; column by column runs up to ``--full-by-column-up-to`` and is
    marked, with an estimate from the largest N run, above it. ``--chain-twin-sizes`` adds a
    numpy twin of the same equations through the same
-   :func:`conformance.probes.colouring.measure` (the checker's own cost, no FMI calls).
+   :func:`conformance.numerics.measure.measure` (the checker's own cost, no FMI calls).
 3. **Calls.** The cost of one fmi3GetDirectionalDerivative / fmi3GetAdjointDerivative call of
    the Chain FMU, through fmpy's ctypes with the arrays prepared: DAE mode with every residual,
    derivative and output against every state, algebraic variable and input (the whole Jacobian
@@ -46,23 +46,26 @@ from bench.inprocess import LoadedFmu
 from bench.static_bench import machine_info
 from conformance.manifest import read_manifest
 from conformance.model import read_model_description
-from conformance.probes import colouring as col
-from conformance.probes import derivatives as D
+from conformance.numerics import colouring as col
+from conformance.numerics import measure
+from conformance.catalogue import default_catalogue
+from conformance.probes.registry import PROBES
 from conformance.probes import jacobian as J
-from conformance.probes import numdiff
+from conformance.numerics import numdiff
 from conformance.probes.api import ProbeContext
 from tests.scenes.build import build_scene
 from tests.scenes.Chain import chain
 
 SCENES = ("SimpleDAE", "Robertson", "HelloWorldDAE", "Chain")
 RULES = ("DAE740", "DAE741", "DAE742", "DAE743", "DAE744", "DAE745", "DAE746")
+OPTIONS = {r.code: r.option_values for r in default_catalogue()}  # the catalogue's defaults
 
 
 class Fmu(LoadedFmu):
     """A scene FMU loaded in process with lsdae's own session, with an instance in DAE mode."""
 
     def __init__(self, path: Path):
-        from conformance.probes.session import start_instance
+        from conformance.runtime.modes import start_instance
 
         super().__init__(path)
         self.dae = start_instance(self.library, "dae")
@@ -120,7 +123,7 @@ def bench_methods(runs: int, scenes: Sequence[str]) -> list[dict[str, Any]]:
                 (survey, ctx), times = _timed(once, runs)
                 calls = (fmu.dae.calls - before) // runs
                 ctx.facts[J.FACT] = survey
-                findings = sum(len(list(D.PROBES[code](ctx))) for code in RULES)
+                findings = sum(len(list(PROBES[code](ctx, **OPTIONS[code]))) for code in RULES)
                 per = {k: sum(dict(p.entries.calls)[k] for p in survey.points)
                        for k in ("evaluate", "directional", "adjoint")}
                 actual, estimate = scaled_errors(survey)
@@ -197,10 +200,10 @@ def _twin_case(n: int, coloured: bool, runs: int) -> dict[str, Any]:
     rows = col.colour_rows(layout.pattern) if coloured else col.one_per_group(
         layout.pattern, rows=True)
     steps = numdiff.step_sizes(base, layout.nominal, method="central")
-    sources = col.Sources(twin.fun, twin.directional, twin.adjoint, layout.dd_columns)
+    sources = measure.Sources(twin.fun, twin.directional, twin.adjoint, layout.dd_columns)
 
-    def once() -> col.Entries:
-        return col.measure(sources, layout.pattern, colouring, steps, base,
+    def once() -> measure.Entries:
+        return measure.measure(sources, layout.pattern, colouring, steps, base,
                            np.random.default_rng(1), row_colouring=rows)
 
     entries, times = _timed(once, runs)
@@ -281,7 +284,7 @@ def bench_scaling(runs: int, fmu_sizes: Sequence[int], twin_sizes: Sequence[int]
 def _call_case(fmu: Fmu, n: int, mode: str, repeats: int) -> list[dict[str, Any]]:
     """Seconds per fmi3GetDirectionalDerivative / fmi3GetAdjointDerivative call (median of
     ``repeats`` batches of 20 calls), arrays prepared beforehand."""
-    from conformance.probes.session import start_instance
+    from conformance.runtime.modes import start_instance
 
     inst = start_instance(fmu.library, mode)
     try:

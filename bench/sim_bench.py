@@ -1,8 +1,8 @@
 """Simulation benchmark: work-precision of DAE mode (IDA) against ODE mode (CVODE).
 
 For SimpleDAE, Robertson and Akzo, each FMU is integrated in DAE mode (SUNDIALS IDA with the
-FMU's directional derivatives, conformance.simulate.dae) and in ODE mode (CVODE,
-conformance.simulate.ode) for rtol = 1e-3 ... 1e-10 (atol_i = rtol * nominal_i), and the result
+FMU's directional derivatives, conformance.numerics.dae) and in ODE mode (CVODE,
+conformance.numerics.ode) for rtol = 1e-3 ... 1e-10 (atol_i = rtol * nominal_i), and the result
 is compared with a reference at the output times:
 
 * Robertson: the reference values of issue 5 (tight-tolerance solutions, consistent with the
@@ -136,9 +136,9 @@ class SceneFmu(LoadedFmu):
     def simulate(self, mode: str, settings: Any, stop: float) -> tuple[Any, float]:
         """One run on a fresh instance: (Trajectory, wall seconds of the integration, from the
         initialised instance and the system's Jacobian colouring, which are left out)."""
-        from conformance.probes.session import start_instance
-        from conformance.simulate.dae import integrate_dae
-        from conformance.simulate.ode import integrate_ode
+        from conformance.runtime.modes import start_instance
+        from conformance.numerics.dae import integrate_dae
+        from conformance.numerics.ode import integrate_ode
         from conformance.simulate.system import FmuDae, FmuOde
 
         inst = start_instance(self.library, mode)
@@ -162,10 +162,13 @@ class SceneFmu(LoadedFmu):
 
 
 def settings_for(rtol: float, reference: Reference) -> Any:
-    from conformance.simulate.settings import Settings
+    from conformance.catalogue import default_catalogue
+    from conformance.numerics.settings import Settings
 
-    return Settings(mode="both", rtol=rtol, stop_time=reference.times[-1],
-                    output_times=reference.times, max_steps=MAX_STEPS, wall_seconds=WALL_SECONDS)
+    options = dict(default_catalogue()["simulation-failed"].option_values)  # the defaults
+    return Settings(**{**options, "mode": "both", "rtol": rtol, "stop_time": reference.times[-1],
+                       "output_times": tuple(reference.times), "max_steps": MAX_STEPS,
+                       "wall_seconds": WALL_SECONDS})
 
 
 def errors(traj: Any, reference: Reference, nominal: dict[str, float]

@@ -30,7 +30,7 @@ from .precommit import fmu_roots
 from .progress import make_progress
 from .reporters import REPORTER_BY_NAME
 from .ruledocs import render_markdown
-from .simulate import cli as simulate_cli
+from . import simulate_command
 
 EXIT_OK, EXIT_FINDINGS, EXIT_USAGE = 0, 1, 2
 
@@ -68,7 +68,7 @@ def _parser() -> argparse.ArgumentParser:
 
     explain = sub.add_parser("explain", help="show one rule in full")
     explain.add_argument("rule", metavar="CODE-or-name")
-    simulate_cli.add_parser(sub)
+    simulate_command.add_parser(sub)
     return parser
 
 
@@ -342,7 +342,7 @@ def cmd_explain(args: argparse.Namespace, catalogue: Catalogue | None = None) ->
 
 
 COMMANDS = {"check": cmd_check, "pre-commit": cmd_precommit, "rules": cmd_rules,
-            "explain": cmd_explain, "simulate": simulate_cli.run}
+            "explain": cmd_explain, "simulate": simulate_command.run}
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -251,7 +251,7 @@ def _run_probe_stage(source, ctx: CheckContext, options: EngineOptions, catalogu
     if not options.probes:
         state.skipped.update((r.code, "probes turned off (--no-probes)") for r in rules)
         return
-    from .probes import run_probes  # numpy and the worker machinery only when probing
+    from .probes.runner import run_probes  # numpy and the worker machinery only when probing
 
     outcome = run_probes(source, ctx, rules, seed=options.seed)
     for code, violation in outcome.violations:

@@ -7,75 +7,36 @@ worker process (the only process that ever loads the FMU's binary) and yields
     def initial_residual_nonzero(ctx: ProbeContext, *, rtol: float = 1e-6, atol: float = 1e-10
                                  ) -> Iterator[Violation]: ...
 
-The runner (``conformance.probes.runner``) starts the worker, hands it the model, manifest, seed
-and the probes to run, enforces the time and memory limits, and turns a crash, hang or memory
+The runner (``conformance.probes.runner``) starts the worker (``conformance.runtime.child``, whose
+entry ``conformance.probes.stage`` runs the probes), hands it the model, manifest, seed and the
+probes to run, enforces the time and memory limits, and turns a crash, hang or memory
 blow-up into a ``binary-*`` finding naming the FMI call in progress. Violations of probes that
 completed before a crash are kept.
 
-Every FMI call goes through an :class:`Evaluator` (implemented by ``conformance.probes.session``
+Every FMI call goes through an :class:`Evaluator` (implemented by ``conformance.runtime.instance``
 on top of fmpy), which records the call in progress, the FMI status and the FMU's log messages.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Callable, Iterable, Mapping, Protocol, Sequence
+from typing import Callable, Iterable, Sequence
 
 import numpy as np
 
 from ..findings import Violation
 from ..manifest import Manifest
 from ..model import ModelDescription
+from ..runtime.errors import FmiError, Unavailable
+from ..runtime.point import Evaluator, Point
+
+__all__ = ["Evaluator", "FmiError", "INFO_KEYS", "Point", "Probe", "ProbeContext", "ProbeSkipped"]
 
 
-class FmiError(Exception):
-    """An FMI call returned fmi3Error/fmi3Fatal (or fmi3Discard where a value was needed).
-
-    ``call`` is the FMI function name, ``status`` its status name, ``log`` the FMU's messages.
-    """
-
-    def __init__(self, call: str, status: str, log: Sequence[str] = ()):
-        super().__init__(f"{call} returned {status}")
-        self.call, self.status, self.log = call, status, tuple(log)
-
-
-class ProbeSkipped(Exception):
-    """Raised by a probe that cannot run on this FMU (e.g. DAE mode could not be started);
-    the message is the reason, reported in ``rules_skipped``. An :class:`FmiError` escaping a
-    probe is reported the same way (the probe could not complete, it found nothing)."""
-
-
-@dataclass(frozen=True)
-class Point:
-    """A sampling point: time and the values of states, algebraic variables and inputs by vr."""
-
-    t: float
-    values: Mapping[int, float]
-    label: str = ""          # e.g. "start", "near-3"
-
-
-class Evaluator(Protocol):
-    """An instance in Continuous-Time Mode, in one mode (DAE or ODE), driven by value reference.
-
-    All arrays are float64, ordered as the sequences of value references passed in.
-    """
-
-    mode: str                                  # "dae" or "ode"
-    calls: int                                 # FMI calls made so far (for the benchmarks)
-
-    def evaluate(self, point: Point, unknowns: Sequence[int]) -> np.ndarray:
-        """Set t and the point's knowns (states via fmi3SetContinuousStates or SetFloat64,
-        algebraic variables (DAE mode), inputs), then read ``unknowns`` with fmi3GetFloat64."""
-        ...
-
-    def directional(self, point: Point, unknowns: Sequence[int], knowns: Sequence[int],
-                    seed: np.ndarray) -> np.ndarray:
-        """fmi3GetDirectionalDerivative at the point: J[unknowns, knowns] @ seed."""
-        ...
-
-    def adjoint(self, point: Point, unknowns: Sequence[int], knowns: Sequence[int],
-                seed: np.ndarray) -> np.ndarray:
-        """fmi3GetAdjointDerivative at the point: seed @ J[unknowns, knowns]."""
-        ...
+# A probe that cannot run on this FMU raises ProbeSkipped; the message is the reason, reported in
+# ``rules_skipped``. It is the runtime's Unavailable, so that what the runtime cannot do (no ODE
+# mode, a call blocked after a hang, a point that cannot be set) skips the probe the same way. An
+# FmiError escaping a probe is reported the same way (the probe could not complete).
+ProbeSkipped = Unavailable
 
 
 @dataclass

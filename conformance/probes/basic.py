@@ -2,8 +2,8 @@
 non-finite values and failing evaluations (the enable handshake is in handshake.py).
 
 Each probe runs in the worker process on a :class:`~conformance.probes.api.ProbeContext` whose
-``facts`` hold the :class:`~conformance.probes.sampling.Layout` (``"layout"``) and the loaded
-:class:`~conformance.probes.session.Library` (``"library"``), and yields violations. Tolerances
+``facts`` hold the :class:`~conformance.runtime.layout.Layout` (``"layout"``) and the loaded
+:class:`~conformance.runtime.library.Library` (``"library"``), and yields violations. Tolerances
 are catalogue options. One fault, one finding: a probe that cannot set a point or start DAE mode
 raises :class:`ProbeSkipped` (or lets the :class:`FmiError` escape), and the rule that owns the
 fault reports it; non-finite values are left to ``nan-or-inf``.
@@ -30,15 +30,15 @@ from .common import (
     unknowns_of,
     var_location,
 )
-from .sampling import Layout, _within
-from .session import Instance, PointNotSet
+from ..runtime.instance import Instance, PointNotSet
+from ..runtime.layout import Layout
+from .sampling import within
 
 # ------------------------------------------------------------------- algebraic-not-settable
 
 
-def algebraic_not_settable(ctx: ProbeContext, *, step: float = 0.1, rtol: float = 1e-12,
-                           react_rtol: float = 1e-9, max_variables: int = 50
-                           ) -> Iterator[Violation]:
+def algebraic_not_settable(ctx: ProbeContext, *, step: float, rtol: float,
+                           react_rtol: float, max_variables: int) -> Iterator[Violation]:
     """DAE-40: in Continuous-Time Mode every algebraic variable accepts fmi3SetFloat64, reads
     back the value set, and the residuals or derivatives change with it. Each variable costs
     two evaluations of every residual and derivative, so a large FMU is checked on a seeded
@@ -83,7 +83,7 @@ def _set_one(ctx: ProbeContext, dae: Instance, layout: Layout, start: Point, vr:
     bounds = layout.bounds.get(vr, (-math.inf, math.inf))
     tried = []
     for sign in (1.0, -1.0):
-        value = _within(v0 + sign * delta, bounds)
+        value = within(v0 + sign * delta, bounds)
         dae.set_point(start)
         dae.set_float64([vr], [value])
         got = float(dae.get_float64([vr])[0])
@@ -124,8 +124,7 @@ def _declared_anywhere(ctx: ProbeContext, vr: int) -> bool:
 # ----------------------------------------------------------------- initial-residual-nonzero
 
 
-def initial_residual_nonzero(ctx: ProbeContext, *, rtol: float = 1e-6, atol: float = 1e-10
-                             ) -> Iterator[Violation]:
+def initial_residual_nonzero(ctx: ProbeContext, *, rtol: float, atol: float) -> Iterator[Violation]:
     """After initialisation in DAE mode, on a fresh instance, every residual is zero within
     ``atol + rtol * nominal`` (the residual's own nominal, 1 when it declares none)."""
     layout = layout_of(ctx)
@@ -156,8 +155,7 @@ def initial_residual_nonzero(ctx: ProbeContext, *, rtol: float = 1e-6, atol: flo
 # ---------------------------------------------------------------- evaluation-not-repeatable
 
 
-def evaluation_not_repeatable(ctx: ProbeContext, *, rtol: float = 1e-10, atol: float = 1e-14
-                              ) -> Iterator[Violation]:
+def evaluation_not_repeatable(ctx: ProbeContext, *, rtol: float, atol: float) -> Iterator[Violation]:
     """The same (t, x, w, u) gives the same residuals, derivatives and outputs whatever was
     evaluated before: points A, B, C evaluated as A B A A C B A, and A, B on a fresh instance."""
     dae = dae_of(ctx)
@@ -212,7 +210,7 @@ def _compare(ctx: ProbeContext, layout: Layout, unknowns: list[int],
 # ------------------------------------------------------------------------------- nan-or-inf
 
 
-def nan_or_inf(ctx: ProbeContext, *, directional: bool = True) -> Iterator[Violation]:
+def nan_or_inf(ctx: ProbeContext, *, directional: bool) -> Iterator[Violation]:
     """No NaN or Inf at any sampled point: residuals, derivatives, outputs and algebraic
     variables in DAE mode; derivatives, outputs and algebraic variables in ODE mode; and, when
     the FMU provides directional derivatives, J @ 1 in DAE mode (every known at once, so a

@@ -1,7 +1,7 @@
 """Helpers shared by the basic probes (basic.py) and the handshake probes (handshake.py).
 
-The :class:`~conformance.probes.sampling.Layout` and the loaded
-:class:`~conformance.probes.session.Library` come from ``ctx.facts`` (``"layout"``,
+The :class:`~conformance.runtime.layout.Layout` and the loaded
+:class:`~conformance.runtime.library.Library` come from ``ctx.facts`` (``"layout"``,
 ``"library"``); locations point at the manifest element (or the variable) a finding is about.
 """
 from __future__ import annotations
@@ -14,8 +14,9 @@ import numpy as np
 from ..findings import Location
 from ..model import MODEL_DESCRIPTION
 from .api import FmiError, ProbeContext, ProbeSkipped
-from .sampling import Layout
-from .session import Instance, Library
+from ..runtime.instance import Instance
+from ..runtime.layout import Layout
+from ..runtime.library import Library
 
 
 def layout_of(ctx: ProbeContext) -> Layout:

@@ -9,13 +9,13 @@ FMU by :func:`conformance.probes.jacobian.survey`:
   sparsity (and fmi3GetVariableDependencies against the manifest, when the FMU provides it);
   ``dependencies-kind-violated``: a non-``dependent`` entry that changes.
 
-dg/dw and ODE against DAE (DAE745-DAE747) are in :mod:`conformance.probes.dgdw`; ``PROBES``
-here is the whole derivative family, as registered.
+dg/dw and ODE against DAE (DAE745-DAE747) are in :mod:`conformance.probes.dgdw`, a family of
+its own that reads the same survey.
 
 Every comparison is scaled: an entry ``J_ij`` is compared in units of the row's scale
 ``S_i = sum_j |J_ij| * nominal_j`` (how much the unknown moves when each known moves by its
 nominal), and a difference counts only when it exceeds ``margin`` times the finite-difference
-error estimate (:mod:`conformance.probes.numdiff`) plus ``rtol * S_i / nominal_j``.
+error estimate (:mod:`conformance.numerics.numdiff`) plus ``rtol * S_i / nominal_j``.
 """
 from __future__ import annotations
 
@@ -26,7 +26,6 @@ from typing import Iterator
 import numpy as np
 
 from ..findings import Violation, evidence
-from . import dgdw
 from .api import FmiError, ProbeContext, ProbeSkipped
 from .jacobian import (
     FACT,
@@ -177,18 +176,16 @@ _CALLS = {"dd": ("directional", "fmi3GetDirectionalDerivative"),
           "adj": ("adjoint", "fmi3GetAdjointDerivative")}
 
 
-def directional_derivative_mismatch(ctx: ProbeContext, *, rtol: float = 1e-5,
-                                    margin: float = 10.0, ulps: float = 100.0
-                                    ) -> Iterator[Violation]:
+def directional_derivative_mismatch(ctx: ProbeContext, *, rtol: float,
+                                    margin: float, ulps: float) -> Iterator[Violation]:
     """fmi3GetDirectionalDerivative against finite differences of the function (DAE-50)."""
     found, _ = _against_fd(ctx, surveyed(ctx), "dd", "DAE740", rtol=rtol, margin=margin,
                            ulps=ulps)
     yield from found
 
 
-def adjoint_derivative_mismatch(ctx: ProbeContext, *, rtol: float = 1e-5, margin: float = 10.0,
-                                ulps: float = 100.0, dot_rtol: float = 1e-6
-                                ) -> Iterator[Violation]:
+def adjoint_derivative_mismatch(ctx: ProbeContext, *, rtol: float, margin: float,
+                                ulps: float, dot_rtol: float) -> Iterator[Violation]:
     """fmi3GetAdjointDerivative against finite differences, and the dot-product test
     v(Js) = (vJ)s against the directional derivative (PD-06, DAE-50)."""
     s = surveyed(ctx)
@@ -196,7 +193,8 @@ def adjoint_derivative_mismatch(ctx: ProbeContext, *, rtol: float = 1e-5, margin
     yield from found
     if worst:
         return
-    directional_ok = not _mismatches(s, "dd", rtol=1e-5, margin=10.0, ulps=ulps)
+    # judged with this rule's tolerances: a probe sees only its own options
+    directional_ok = not _mismatches(s, "dd", rtol=rtol, margin=margin, ulps=ulps)
     for ps in s.points:
         if ps.entries.dot is None or not directional_ok:
             continue
@@ -211,8 +209,8 @@ def adjoint_derivative_mismatch(ctx: ProbeContext, *, rtol: float = 1e-5, margin
             return
 
 
-def dependency_undeclared(ctx: ProbeContext, *, rtol: float = 1e-8, margin: float = 10.0,
-                          ulps: float = 100.0) -> Iterator[Violation]:
+def dependency_undeclared(ctx: ProbeContext, *, rtol: float, margin: float,
+                          ulps: float) -> Iterator[Violation]:
     """A partial derivative clearly non-zero for a known the dependencies leave out (MS-20)."""
     s = surveyed(ctx)
     layout = s.layout
@@ -271,8 +269,7 @@ def _reported_dependencies(ctx: ProbeContext, layout: JacobianLayout) -> Iterato
                 subject=entry)
 
 
-def dependency_never_observed(ctx: ProbeContext, *, min_points: int = 2
-                              ) -> Iterator[Violation]:
+def dependency_never_observed(ctx: ProbeContext, *, min_points: int) -> Iterator[Violation]:
     """A declared dependency whose function never moved at any sampling point."""
     s = surveyed(ctx, min_points=min_points)
     layout = s.layout
@@ -292,8 +289,8 @@ def dependency_never_observed(ctx: ProbeContext, *, min_points: int = 2
                 subject=layout.entry(i, j))
 
 
-def dependencies_kind_violated(ctx: ProbeContext, *, rtol: float = 1e-6, margin: float = 10.0,
-                               ulps: float = 100.0) -> Iterator[Violation]:
+def dependencies_kind_violated(ctx: ProbeContext, *, rtol: float, margin: float,
+                               ulps: float) -> Iterator[Violation]:
     """A ``constant``/``fixed``/``tunable``/``discrete`` entry whose partial derivative changes
     between sampling points (MS-31: such an unknown is affine in that known)."""
     s = surveyed(ctx, min_points=2)
@@ -332,5 +329,4 @@ PROBES = {
     "DAE742": dependency_undeclared,
     "DAE743": dependency_never_observed,
     "DAE744": dependencies_kind_violated,
-    **dgdw.PROBES,
 }

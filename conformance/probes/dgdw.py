@@ -16,7 +16,7 @@ from typing import Iterator
 import numpy as np
 
 from ..findings import Violation, evidence
-from . import numdiff
+from ..numerics import numdiff
 from .api import Evaluator, FmiError, Point, ProbeContext, ProbeSkipped
 from .jacobian import PointSurvey, Survey, point_evidence, row_scale, surveyed
 
@@ -98,8 +98,7 @@ def _condition_violation(s: Survey, found: tuple, message: str, **extra) -> Viol
         point=point_evidence(layout, ps)))
 
 
-def algebraic_jacobian_ill_conditioned(ctx: ProbeContext, *, max_condition: float = 1e8
-                                       ) -> Iterator[Violation]:
+def algebraic_jacobian_ill_conditioned(ctx: ProbeContext, *, max_condition: float) -> Iterator[Violation]:
     """The scaled dg/dw has a condition number above ``max_condition`` (but is not singular)."""
     s = _algebraic_survey(ctx)
     found = _worst_condition(s, singular=False)
@@ -184,8 +183,8 @@ def _newton(ev: Evaluator, base: Point, res: list[int], alg: list[int], w0: np.n
     return _Solve(w, g, max_iterations, bool(np.all(np.abs(g) <= noise)))
 
 
-def ode_dae_inconsistent(ctx: ProbeContext, *, rtol: float = 1e-6, margin: float = 10.0,
-                         ulps: float = 100.0, max_iterations: int = 20) -> Iterator[Violation]:
+def ode_dae_inconsistent(ctx: ProbeContext, *, rtol: float, margin: float,
+                         ulps: float, max_iterations: int) -> Iterator[Violation]:
     """At the same (t, x, u), the derivatives and outputs of ODE mode equal those of DAE mode
     at the algebraic variables that solve the residuals (DAE-42)."""
     s = surveyed(ctx)

@@ -1,7 +1,7 @@
 """The handshake probes: switching DAE mode on and off (``enable-handshake``) and a refused
 initialisation in DAE mode (``dae-initialization-refused``, information under alpha.1).
 
-Each probe opens its own instances from the loaded :class:`~conformance.probes.session.Library`
+Each probe opens its own instances from the loaded :class:`~conformance.runtime.library.Library`
 (``ctx.facts["library"]``) and walks the FMI calls one by one, so a finding names the call that
 failed and the sequence before it.
 """
@@ -12,8 +12,10 @@ from typing import Any, Iterator
 from ..findings import Location, Violation, evidence
 from .api import FmiError, ProbeContext, ProbeSkipped
 from .common import error_evidence, layout_of, manifest_location, new_instance
-from .sampling import Layout
-from .session import INIT_CALLS, Instance, Library, configure, reconfigure
+from ..runtime.instance import Instance
+from ..runtime.layout import Layout
+from ..runtime.library import Library
+from ..runtime.modes import INIT_CALLS, configure, reconfigure
 
 # -------------------------------------------------------------------------- enable-handshake
 

@@ -7,7 +7,7 @@ own Jacobian with) from the XML. At every sampling point the Jacobian is measure
 (:func:`survey`, memoised in ``ctx.facts``): finite differences of the function coloured by the
 declared sparsity, the FMU's directional and adjoint derivatives coloured the same way, the
 declared zeros verified with a few random directions, and every row under suspicion measured
-again column by column (:func:`conformance.probes.colouring.measure`).
+again column by column (:func:`conformance.numerics.measure.measure`).
 
 Also the helpers the probes share: the row scale ``S_i = sum_j |J_ij| * nominal_j``, a point as
 evidence, and the per-FMU ``probe_errors`` the HTML report plots.
@@ -21,8 +21,8 @@ import numpy as np
 
 from ..findings import Location
 from ..model import ModelDescription, Unknown, Variable
-from . import colouring as col
-from . import numdiff
+from ..numerics import colouring as col
+from ..numerics import measure, numdiff
 from .api import Evaluator, FmiError, Point, ProbeContext, ProbeSkipped
 
 log = logging.getLogger(__name__)
@@ -89,7 +89,7 @@ class JacobianLayout:
 class PointSurvey:
     point: Point
     x: np.ndarray
-    entries: col.Entries
+    entries: measure.Entries
 
 
 @dataclass
@@ -297,10 +297,10 @@ def _measure_point(ev, layout, point, result, colouring, row_colouring, rng, set
             result.failures.append((flag, point, exc))
             setattr(result, flag, False)
     result.probed = True
-    sources = col.Sources(at.fun, at.directional if result.directional else None,
+    sources = measure.Sources(at.fun, at.directional if result.directional else None,
                           at.adjoint if result.adjoint else None, layout.dd_columns)
     try:
-        entries = col.measure(sources, layout.pattern, colouring, steps, at.x, rng,
+        entries = measure.measure(sources, layout.pattern, colouring, steps, at.x, rng,
                               row_colouring=row_colouring, method=settings.method,
                               directions=settings.directions, suspicion=settings.suspicion,
                               ulps=settings.ulps)
@@ -350,7 +350,7 @@ def record_errors(ctx: ProbeContext, code: str, items: list[tuple[str, float, fl
 
 # ------------------------------------------------------------------------------ shared helpers
 
-def row_scale(layout: JacobianLayout, e: col.Entries, *,
+def row_scale(layout: JacobianLayout, e: measure.Entries, *,
                declared_only: bool = False) -> np.ndarray:
     """S_i = sum_j |J_ij| * nominal_j over the measured entries of each row, shape (m,)."""
     weights = np.abs(np.nan_to_num(e.fd)) * layout.nominal[e.cols]

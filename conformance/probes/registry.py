@@ -1,13 +1,14 @@
 """Probes by rule code: explicit, no discovery magic (like ``conformance.checks.REGISTRY``).
 
 Each family module exposes its own ``PROBES`` dict; :func:`register` merges it here and refuses
-a code registered twice. A new family adds two lines at the end of this file. The runner emits
-the ``binary-*`` rules itself; they have no probe function.
+a code registered twice. A new family adds one import and one line at the end of this file; no
+family imports another. The runner emits the ``binary-*`` rules itself; they have no function.
 """
 from __future__ import annotations
 
 from typing import Mapping
 
+from . import basic, derivatives, dgdw, handshake, simulation
 from .api import Probe
 
 PROBES: dict[str, Probe] = {}
@@ -20,15 +21,8 @@ def register(family: Mapping[str, Probe]) -> None:
         PROBES[code] = probe
 
 
-from .handshake import PROBES as _handshake  # noqa: E402
-
-register(_handshake)
-from .basic import PROBES as _basic  # noqa: E402
-
-register(_basic)
-from .derivatives import PROBES as _derivatives  # noqa: E402
-
-register(_derivatives)
-from .simulation import PROBES as _simulation  # noqa: E402
-
-register(_simulation)
+register(handshake.PROBES)
+register(basic.PROBES)
+register(derivatives.PROBES)
+register(dgdw.PROBES)
+register(simulation.PROBES)

@@ -2,7 +2,7 @@
 
 :func:`run_probes` decides whether anything can be probed (a modelDescription, a manifest, a
 Model Exchange binary for this platform), extracts ``binaries/<tuple>/`` and ``resources/`` into
-a private temporary directory, and starts ``python -m conformance.probes.worker`` there: the
+a private temporary directory, and starts ``python -m conformance.runtime.child`` there: the
 only process that ever loads the FMU's library. The worker reports each probe as a JSON line.
 
 The runner never trusts the worker to finish:
@@ -20,7 +20,7 @@ The runner never trusts the worker to finish:
   ``abort()``) is a ``binary-crashed`` finding.
 
 Each of these findings names the probe and the FMI call in progress, read from the shared
-:class:`~conformance.probes.worker.CallRecord` file the worker writes before every FMI call.
+:class:`~conformance.runtime.callrecord.CallRecord` file the worker writes before every FMI call.
 Violations of probes that completed are kept, and a fresh worker runs the remaining probes (at
 most ``max_restarts`` times, option of ``binary-crashed``). A death during setup ends probing of
 that FMU: a new worker would only die again.
@@ -29,41 +29,30 @@ from __future__ import annotations
 
 import logging
 import os
-import pickle
-import platform
 import shutil
-import subprocess
-import sys
 import tempfile
-import time
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Iterable, Sequence
 
 from ..catalogue import RuleSpec, default_catalogue
-from ..findings import Location, Violation, evidence
+from ..findings import Violation
 from ..manifest import MANIFEST
+from ..runtime.host import host_platform_tuple, library_extension
+from .driver import RUNNER_RULES, Driver
 from .registry import PROBES
-from .worker import CallRecord, Job, WorkerProcess, violation_from_json
 
 log = logging.getLogger(__name__)
-
-CRASHED, TIMED_OUT, MEMORY, NOT_LOADABLE = (
-    "binary-crashed", "binary-timed-out", "binary-memory-limit", "binary-not-loadable")
-RUNNER_RULES = (CRASHED, TIMED_OUT, MEMORY, NOT_LOADABLE)
-MEMORY_FRACTION = 0.8        # a death at this share of the address-space limit is "memory"
-STDERR_TAIL = 1500
-PACKAGE_ROOT = str(Path(__file__).resolve().parents[2])
 
 
 @dataclass(frozen=True)
 class Limits:
-    """The catalogue options of the runner rules."""
+    """The catalogue options of the runner rules (their defaults live in the catalogue only)."""
 
-    probe_seconds: float = 20.0
-    fmu_seconds: float = 60.0
-    address_space_mib: int = 2048
-    max_restarts: int = 3
+    probe_seconds: float
+    fmu_seconds: float
+    address_space_mib: int
+    max_restarts: int
 
     @classmethod
     def from_rules(cls, rules: dict[str, RuleSpec | None]) -> Limits:
@@ -83,21 +72,6 @@ class ProbeOutcome:
     run: set[str] = field(default_factory=set)
     skipped: set[tuple[str, str]] = field(default_factory=set)
     info: dict[str, Any] = field(default_factory=dict)
-
-
-def host_platform_tuple() -> str:
-    """The FMI 3 platform tuple of this machine, e.g. ``x86_64-linux``."""
-    machine = platform.machine().lower()
-    arch = {"amd64": "x86_64", "arm64": "aarch64", "i386": "x86", "i686": "x86",
-            "armv7l": "aarch32"}.get(machine, machine)
-    system = ("linux" if sys.platform.startswith("linux") else "darwin"
-              if sys.platform == "darwin" else "windows" if sys.platform in ("win32", "cygwin")
-              else sys.platform)
-    return f"{arch}-{system}"
-
-
-def library_extension() -> str:
-    return {"darwin": ".dylib", "win32": ".dll", "cygwin": ".dll"}.get(sys.platform, ".so")
 
 
 def run_probes(source: Any, ctx: Any, rules: Sequence[RuleSpec], *, seed: int = 0
@@ -176,7 +150,7 @@ class _Run:
         try:
             if self._extract(tmp):
                 self.outcome.run.update(r.code for r in self.rules if r.name in RUNNER_RULES)
-                _Driver(self, tmp, probes).drive()
+                Driver(self, tmp, probes).drive()
         finally:
             shutil.rmtree(tmp, ignore_errors=True)
         return self.outcome
@@ -196,215 +170,3 @@ class _Run:
         return True
 
 
-@dataclass
-class _Death:
-    kind: str  # "end", "died", "timeout", "fmu-timeout", "load-failed", "fatal", "worker-error"
-    probe: str = ""
-
-
-class _Driver:
-    """Starts workers until every probe has run or cannot run; turns deaths into findings."""
-
-    def __init__(self, run: _Run, tmp: str, probes: list[RuleSpec]):
-        self.run, self.tmp, self.remaining = run, tmp, probes
-        self.limits = run.limits
-        self.call_file = os.path.join(tmp, "call")
-        self.stderr_file = os.path.join(tmp, "worker.log")
-        self.fmu_deadline = time.monotonic() + self.limits.fmu_seconds
-        self.blocked: list[str] = []   # FMI functions that hung: not called again
-
-    def drive(self) -> None:
-        restarts = 0
-        while True:
-            result = self._one_worker()
-            done = {c for c, _ in self.run.outcome.skipped} | self.run.outcome.run
-            self.remaining = [r for r in self.remaining if r.code not in done]
-            if result.kind == "end":
-                self.run.skip(self.remaining, "not run: the worker ended early")
-                return
-            if result.kind == "load-failed":
-                self.run.skip(self.remaining, "the binary cannot be loaded (binary-not-loadable)")
-                return
-            if result.kind == "fatal" and not self.remaining:
-                return
-            if result.kind == "fmu-timeout":
-                self.run.skip(self.remaining, f"the per-FMU time limit of "
-                              f"{self.limits.fmu_seconds:g} s was reached")
-                return
-            if result.probe in ("setup", ""):
-                self.run.skip(self.remaining, "the worker failed before the probes could run "
-                              "(see the findings)")
-                return
-            if not self.remaining:
-                return
-            restarts += 1
-            if restarts > self.limits.max_restarts:
-                self.run.skip(self.remaining, f"not run: the worker was restarted "
-                              f"{self.limits.max_restarts} times")
-                return
-
-    # -- one worker process --------------------------------------------------------------
-
-    def _start(self) -> subprocess.Popen[bytes]:
-        ctx = self.run.ctx
-        job = Job(directory=os.path.join(self.tmp, "fmu"), call_file=self.call_file,
-                  model=ctx.model, manifest=ctx.manifest, draft=ctx.draft, seed=self.run.seed,
-                  probes=[(r.code, r.name, r.option_values) for r in self.remaining],
-                  blocked=list(self.blocked))
-        job_file = os.path.join(self.tmp, "job.pickle")
-        with open(job_file, "wb") as fh:
-            pickle.dump(job, fh, protocol=pickle.HIGHEST_PROTOCOL)
-        with open(self.call_file, "wb") as fh:
-            fh.write(bytes(CallRecord.SIZE))
-        env = dict(os.environ)
-        env["PYTHONPATH"] = os.pathsep.join(
-            p for p in (PACKAGE_ROOT, env.get("PYTHONPATH", "")) if p)
-        # One thread per library and few malloc arenas keep the address space small.
-        env.update(OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1", MKL_NUM_THREADS="1",
-                   MALLOC_ARENA_MAX="2", LSDAE_PROBE_PARENT=str(os.getpid()))
-        limit = int(self.limits.address_space_mib) << 20
-        with open(self.stderr_file, "wb") as err:
-            return subprocess.Popen(
-                [sys.executable, "-m", "conformance.probes.worker", job_file, str(limit)],
-                stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=err, cwd=self.tmp,
-                env=env, start_new_session=True)
-
-    def _one_worker(self) -> _Death:
-        proc = self._start()
-        watch = WorkerProcess(proc)
-        current = "setup"
-        step_deadline = time.monotonic() + self.limits.probe_seconds
-        try:
-            while True:
-                now = time.monotonic()
-                if now >= self.fmu_deadline or now >= step_deadline:
-                    per_fmu = now >= self.fmu_deadline
-                    watch.kill()
-                    probe = self._timed_out(current, per_fmu)
-                    return _Death("fmu-timeout" if per_fmu else "timeout", probe)
-                events, eof = watch.read(min(step_deadline, self.fmu_deadline) - now)
-                for event in events:
-                    kind = event.get("event")
-                    if kind == "start":
-                        current = str(event.get("code", ""))
-                        step_deadline = time.monotonic() + self.limits.probe_seconds
-                    elif kind == "done":
-                        self._done(event)
-                        current = ""
-                        step_deadline = time.monotonic() + self.limits.probe_seconds
-                    elif kind == "ready":
-                        watch.baseline = event.get("memory") or {}
-                        for key, value in (event.get("info") or {}).items():
-                            self.run.outcome.info.setdefault(key, value)
-                        current = ""
-                    elif kind == "load-failed":
-                        self.run.emit(NOT_LOADABLE, replace(
-                            violation_from_json(event.get("violation") or {}),
-                            location=Location(file=self.run.binary)))
-                        watch.finish()
-                        return _Death("load-failed", "setup")
-                    elif kind == "memory":
-                        watch.memory_error = True
-                    elif kind == "worker-error":
-                        self.run.emit("internal-error", Violation(
-                            f"the probe worker failed: {event.get('error')}",
-                            evidence=evidence(traceback=str(event.get("traceback", "")))))
-                        watch.finish()
-                        return _Death("worker-error", "setup")
-                    elif kind == "fatal":
-                        watch.finish()
-                        return _Death("fatal", str(event.get("code", "")))
-                    elif kind == "end":
-                        watch.finish()
-                        return _Death("end")
-                if eof:  # the channel closed before "end": whatever the exit status, a death
-                    watch.finish()
-                    return _Death("died", self._died(current, watch))
-        finally:
-            watch.kill()
-
-    def _done(self, event: dict[str, Any]) -> None:
-        code = str(event.get("code"))
-        outcome = self.run.outcome
-        violations = [violation_from_json(v) for v in event.get("violations") or []]
-        outcome.violations.extend((code, v) for v in violations)
-        skipped = event.get("skipped")
-        if skipped and not violations:
-            outcome.skipped.add((code, str(skipped)))
-        else:
-            outcome.run.add(code)
-        for key, value in (event.get("info") or {}).items():
-            if key not in ("points", "seed"):
-                outcome.info[key] = value
-
-    # -- findings --------------------------------------------------------------------------
-
-    def _record(self) -> tuple[str, str, bool]:
-        try:
-            with open(self.call_file, "rb") as fh:
-                return CallRecord.parse(fh.read(CallRecord.SIZE))
-        except OSError:
-            return "", "", False
-
-    def _stderr(self) -> str:
-        try:
-            with open(self.stderr_file, "rb") as fh:
-                fh.seek(max(0, os.path.getsize(self.stderr_file) - STDERR_TAIL))
-                text = fh.read().decode("utf-8", "replace").strip()
-        except OSError:
-            return ""
-        # paths of the temporary directory would make two reports of one FMU differ
-        return text.replace(os.path.join(self.tmp, "fmu") + os.sep, "").replace(self.tmp, "<tmp>")
-
-    def _stderr_evidence(self) -> dict[str, str]:
-        text = self._stderr()
-        return {"stderr": text} if text else {}
-
-    def _context(self, current: str) -> tuple[str, str, str, dict[str, Any]]:
-        probe, call, in_progress = self._record()
-        probe = probe or current
-        if not call:
-            where = "before any FMI call"
-        elif in_progress:
-            where = f"during {call}"
-        else:
-            where = f"after {call} had returned"
-        facts = {"probe": probe, "call": call or None, "call_in_progress": in_progress}
-        if probe in self.run.by_name or any(r.code == probe for r in self.run.rules):
-            self.run.outcome.run.add(probe)
-        return probe, call, where, facts
-
-    def _timed_out(self, current: str, per_fmu: bool) -> str:
-        probe, call, where, facts = self._context(current)
-        if call and facts["call_in_progress"]:
-            self.blocked.append(call)
-        limit = self.limits.fmu_seconds if per_fmu else self.limits.probe_seconds
-        scope = "per FMU" if per_fmu else "per probe"
-        self.run.emit(TIMED_OUT, Violation(
-            f"the binary did not respond within the {limit:g} s limit {scope}: stopped "
-            f"{where}, in {self.run.names(probe)}", Location(file=self.run.binary),
-            evidence(facts, limit_seconds=limit, limit=scope, **self._stderr_evidence()),
-            subject=call or probe))
-        return probe
-
-    def _died(self, current: str, watch: WorkerProcess) -> str:
-        probe, call, where, facts = self._context(current)
-        how = watch.how()
-        if probe == "setup" and not call:  # died before touching the binary: our defect
-            self.run.emit("internal-error", Violation(
-                f"the probe worker failed before loading the binary ({how}): "
-                f"{(self._stderr().splitlines() or ['no message'])[-1]}",
-                evidence=evidence(exit=how, **self._stderr_evidence())))
-            return probe
-        ev = evidence(facts, exit=how, **self._stderr_evidence())
-        limit_mib = int(self.limits.address_space_mib)
-        if watch.memory_error or watch.peak() >= MEMORY_FRACTION * (limit_mib << 20):
-            self.run.emit(MEMORY, Violation(
-                f"the binary exhausted the {limit_mib} MiB address-space limit {where}, in "
-                f"{self.run.names(probe)} ({how})", Location(file=self.run.binary),
-                ev + evidence(limit_mib=limit_mib), subject=call or probe))
-        else:
-            self.run.emit(CRASHED, Violation(
-                f"the binary crashed ({how}) {where}, in {self.run.names(probe)}",
-                Location(file=self.run.binary), ev, subject=call or probe))
-        return probe

@@ -1,8 +1,4 @@
-"""The model's layout and the seeded sampling points.
-
-:class:`Layout` says which value references are states, algebraic variables, residuals, inputs
-and outputs in each mode, with their nominal values, bounds and start values; it is read once
-from the model and the manifest.
+"""The seeded sampling points of the probes.
 
 The first sampling point is where the FMU stands after its initialisation in DAE mode (time,
 states, algebraic variables, inputs read back with fmi3GetFloat64). The others perturb every
@@ -15,151 +11,13 @@ algebraic variables, so every probe must work at any point.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, Mapping, Sequence
+from typing import Any, Sequence
 
 import numpy as np
 
-from ..manifest import Manifest
-from ..model import FLOAT_TYPES, ModelDescription, Variable
+from ..runtime.instance import Instance
+from ..runtime.layout import Layout
 from .api import FmiError, Point
-
-if TYPE_CHECKING:
-    from .session import Instance
-
-def _float(text: str | None, default: float) -> float:
-    try:
-        value = float(text) if text is not None else default
-    except ValueError:
-        return default
-    return value if math.isfinite(value) else default
-
-
-def _scalar_float64(var: Variable | None) -> bool:
-    return var is not None and var.type == "Float64" and not var.dimensions
-
-
-@dataclass(frozen=True)
-class Layout:
-    """Which value references play which role, per mode; read once from model and manifest.
-
-    Only scalar Float64 variables take part (``ignored`` lists the others by name). The DAE-mode
-    lists come from the manifest ModelStructure, falling back to modelDescription's for a kind
-    the manifest does not list (open question Q-02 of the digest).
-    """
-
-    states: tuple[int, ...]              # DAE mode, in ContinuousStateDerivative order
-    derivatives: tuple[int, ...]
-    ode_states: tuple[int, ...]
-    ode_derivatives: tuple[int, ...]
-    algebraic: tuple[int, ...]
-    residuals: tuple[int, ...]
-    inputs: tuple[int, ...]
-    outputs: tuple[int, ...]
-    ode_outputs: tuple[int, ...]
-    enable: int | None                   # value reference of the usable Boolean switch
-    enable_status: str                   # "ok", "absent" (a DAE-only FMU) or "unusable"
-    enable_tunable: bool
-    token: str
-    model_identifier: str
-    start_time: float = 0.0
-    names: Mapping[int, str] = field(default_factory=dict)
-    nominal: Mapping[int, float] = field(default_factory=dict)
-    bounds: Mapping[int, tuple[float, float]] = field(default_factory=dict)
-    start: Mapping[int, float] = field(default_factory=dict)
-    ignored: tuple[str, ...] = ()
-    provides_directional: bool = False
-    provides_adjoint: bool = False
-
-    def states_for(self, mode: str) -> tuple[int, ...]:
-        return self.states if mode == "dae" else self.ode_states
-
-    def derivatives_for(self, mode: str) -> tuple[int, ...]:
-        return self.derivatives if mode == "dae" else self.ode_derivatives
-
-    def outputs_for(self, mode: str) -> tuple[int, ...]:
-        return self.outputs if mode == "dae" else self.ode_outputs
-
-    def name(self, vr: int) -> str:
-        return self.names.get(vr, f"vr {vr}")
-
-    def scale(self, vr: int) -> float:
-        return self.nominal.get(vr, 1.0)
-
-    @classmethod
-    def build(cls, model: ModelDescription, manifest: Manifest | None) -> Layout:
-        by_vr = model.by_vr
-        ignored: list[str] = []
-
-        def usable(vrs: Sequence[int | None]) -> tuple[int, ...]:
-            out: list[int] = []
-            for vr in vrs:
-                var = by_vr.get(vr) if vr is not None else None
-                if _scalar_float64(var) and vr not in out:
-                    out.append(vr)  # type: ignore[arg-type]
-                elif var is not None and var.type in FLOAT_TYPES:
-                    ignored.append(var.name)
-            return tuple(out)
-
-        def derivative_pairs(unknowns: Sequence[Any]) -> tuple[tuple[int, ...], tuple[int, ...]]:
-            ders, states = [], []
-            for u in unknowns:
-                der = by_vr.get(u.vr) if u.vr is not None else None
-                state = by_vr.get(der.derivative) if der and der.derivative is not None else None
-                if _scalar_float64(der) and _scalar_float64(state):
-                    ders.append(u.vr)
-                    states.append(der.derivative)  # type: ignore[union-attr]
-            return tuple(states), tuple(ders)
-
-        md_csd = list(model.unknowns("ContinuousStateDerivative"))
-        ode_states, ode_ders = derivative_pairs(md_csd)
-        ms_csd = list(manifest.unknowns("ContinuousStateDerivative")) if manifest else []
-        states, ders = derivative_pairs(ms_csd) if ms_csd else (ode_states, ode_ders)
-        md_outputs = [u.vr for u in model.unknowns("Output")]
-        ms_outputs = [u.vr for u in manifest.unknowns("Output")] if manifest else []
-        enable, status, tunable = _enable(model, manifest)
-        me = model.model_exchange
-        names, nominal, bounds, start = {}, {}, {}, {}
-        for var in model.variables:
-            if var.vr is None:
-                continue
-            names.setdefault(var.vr, var.name)
-            if var.type in FLOAT_TYPES:
-                nom = abs(_float(var.nominal, 1.0))
-                nominal[var.vr] = nom if nom > 0 else 1.0
-                bounds[var.vr] = (_float(var.minimum, -math.inf), _float(var.maximum, math.inf))
-                if var.start is not None:
-                    start[var.vr] = _float(var.start.split()[0] if var.start.split() else None,
-                                           0.0)
-        inputs = [v.vr for v in model.variables
-                  if v.causality == "input" and v.variability == "continuous"]
-        return cls(
-            states=states, derivatives=ders, ode_states=ode_states, ode_derivatives=ode_ders,
-            algebraic=usable([a.vr for a in manifest.algebraic] if manifest else []),
-            residuals=usable([r.vr for r in manifest.residuals] if manifest else []),
-            inputs=usable(inputs), outputs=usable(ms_outputs or md_outputs),
-            ode_outputs=usable(md_outputs), enable=enable, enable_status=status,
-            enable_tunable=tunable, token=model.instantiation_token or "",
-            model_identifier=(me.model_identifier if me else None) or "",
-            names=names, nominal=nominal, bounds=bounds, start=start,
-            ignored=tuple(dict.fromkeys(ignored)),
-            provides_directional=bool(me and me.flag("providesDirectionalDerivatives")),
-            provides_adjoint=bool(me and me.flag("providesAdjointDerivatives")),
-        )
-
-
-def _enable(model: ModelDescription, manifest: Manifest | None) -> tuple[int | None, str, bool]:
-    """(value reference, status, tunable) of the enable parameter, if it can be used."""
-    if manifest is None or not manifest.enables:
-        return None, "absent", False
-    ref = manifest.enables[0]
-    var = model.by_vr.get(ref.vr) if ref.vr is not None else None
-    if var is None and ref.name:
-        var = next((v for v in model.variables if v.name == ref.name), None)
-    if var is None or var.vr is None or var.type != "Boolean" or var.dimensions:
-        return None, "unusable", False
-    return var.vr, "ok", var.variability == "tunable"
-
 
 NEAR_POINTS = 3   # points besides the start point
 STEP = 0.1        # relative size of a perturbation
@@ -192,7 +50,7 @@ def start_point(inst: Instance | None, layout: Layout,
     return Point(layout.start_time, out, "start")
 
 
-def _within(value: float, bounds: tuple[float, float]) -> float:
+def within(value: float, bounds: tuple[float, float]) -> float:
     lo, hi = bounds
     if value < lo:
         value = min(2 * lo - value, hi) if math.isfinite(hi) else 2 * lo - value
@@ -212,7 +70,7 @@ def near_points(start: Point, layout: Layout, rng: np.random.Generator, *,
         for vr, w in zip(vrs, weights[1:]):
             v = start.values[vr]
             scale = max(layout.scale(vr), abs(v))
-            values[vr] = _within(v + step * scale * float(w),
+            values[vr] = within(v + step * scale * float(w),
                                  layout.bounds.get(vr, (-math.inf, math.inf)))
         t = start.t + TIME_STEP * abs(float(weights[0]))
         out.append(Point(t, values, f"near-{k + 1}"))

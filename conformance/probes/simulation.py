@@ -1,7 +1,7 @@
 """Simulation probes (DAE801-DAE839): integrate the FMU in DAE mode (IDA) and ODE mode (CVODE).
 
-The runs themselves are ``conformance.simulate``; here they are started on fresh instances, kept
-in ``ctx.facts`` so every rule reads the same runs, and judged:
+The runs themselves are :func:`conformance.simulate.integrate.simulate_instance`; here they are
+started on fresh instances, kept in ``ctx.facts`` so every rule reads the same runs, and judged:
 
 * ``simulation-failed``: IDA (DAE mode) or CVODE (ODE mode) cannot get from the start to the
   stop time, or stalls, or no consistent initial point exists. This rule carries the simulation
@@ -32,10 +32,12 @@ from typing import Any, Iterator
 
 import numpy as np
 
+from ..catalogue import default_catalogue
 from ..findings import Location, Violation, evidence
-from ..simulate import settings as st
-from ..simulate.compare import compare
-from ..simulate.settings import Settings, Trajectory
+from ..numerics import settings as st
+from ..numerics.compare import compare
+from ..numerics.settings import Settings, Trajectory
+from ..simulate.integrate import simulate_instance
 from .api import FmiError, ProbeContext, ProbeSkipped
 from .common import layout_of, root_location
 
@@ -64,8 +66,6 @@ def _settings(ctx: ProbeContext) -> Settings:
     """The settings given to simulation-failed, else that rule's catalogue defaults."""
     settings = ctx.facts.get("simulation.settings")
     if not isinstance(settings, Settings):
-        from ..catalogue import default_catalogue
-
         rule = default_catalogue().get(SETTINGS_RULE)
         settings = Settings.from_options(rule.option_values if rule else {})
         ctx.facts["simulation.settings"] = settings
@@ -137,10 +137,6 @@ def _owned_elsewhere(traj: Trajectory) -> str:
 
 def _simulate(ctx: ProbeContext, mode: str, settings: Settings | None = None) -> Trajectory:
     """One run in ``mode`` on a fresh instance, freed afterwards."""
-    from ..simulate.dae import integrate_dae
-    from ..simulate.ode import integrate_ode
-    from ..simulate.system import FmuDae, FmuOde
-
     settings = settings or _settings(ctx)
     if settings.mode not in (mode, "both"):
         raise ProbeSkipped(f"the simulation runs in {settings.mode.upper()} mode only")
@@ -157,14 +153,8 @@ def _simulate(ctx: ProbeContext, mode: str, settings: Settings | None = None) ->
         raise ProbeSkipped("no continuous states in ODE mode")
     inst = ctx.new_instance(mode)
     try:
-        if mode == "dae":
-            system = FmuDae(inst, layout, ctx.manifest)
-            y0 = inst.get_float64([*system.states, *system.algebraic])
-            return integrate_dae(system, settings, t0=start, y0=y0, stop=stop)
-        ode = FmuOde(inst, layout, ctx.model)
-        nominal = np.array([layout.scale(vr) for vr in ode.algebraic])
-        return integrate_ode(ode, settings, t0=start, x0=inst.get_float64(ode.states),
-                             stop=stop, algebraic_nominal=nominal)
+        return simulate_instance(inst, layout, settings, start=start, stop=stop,
+                                 model=ctx.model, manifest=ctx.manifest)
     finally:
         inst.free()
 
@@ -297,9 +287,9 @@ def _ode(ctx: ProbeContext) -> Trajectory:
     return _run(ctx, "ode")
 
 
-def ode_dae_trajectory_mismatch(ctx: ProbeContext, *, factor: float = 100.0,
-                                confirm_rtol_ratio: float = 0.01, confirm_levels: int = 2,
-                                confirm_shrink: float = 0.1) -> Iterator[Violation]:
+def ode_dae_trajectory_mismatch(ctx: ProbeContext, *, factor: float,
+                                confirm_rtol_ratio: float, confirm_levels: int,
+                                confirm_shrink: float) -> Iterator[Violation]:
     """DAE mode and ODE mode give the same trajectories, within ``factor`` tolerance units.
 
     A gap above ``factor`` is confirmed at tighter tolerances (``confirm_rtol_ratio`` times

@@ -46,7 +46,7 @@ def _figure(width: float, height: float):
 
 
 def _encode(fig, *, png: bool) -> str:
-    import matplotlib
+    import matplotlib  # heavy: imported only when there is something to draw
 
     buffer = io.BytesIO()
     with matplotlib.rc_context(_RC):
@@ -73,7 +73,7 @@ def _pairs(value: Any, rows: int, cols: int) -> set[tuple[int, int]]:
 
 def sparsity(jacobian: Mapping[str, Any]) -> Plot:
     """Declared versus observed sparsity of the DAE Jacobian (rows unknowns, columns knowns)."""
-    import matplotlib
+    import matplotlib  # heavy: imported only when there is something to draw
 
     rows = [str(r) for r in jacobian.get("rows", ())]
     cols = [str(c) for c in jacobian.get("cols", ())]
@@ -151,7 +151,7 @@ def _bars(entries: Sequence[Mapping[str, Any]]) -> list[_Bar]:
 
 def probe_errors(entries: Sequence[Mapping[str, Any]]) -> Plot:
     """Each probe entry's error relative to its tolerance; above 1 is a failure."""
-    import matplotlib
+    import matplotlib  # heavy: imported only when there is something to draw
 
     bars = _bars(entries)
     shown = bars[:MAX_BARS]
@@ -197,7 +197,7 @@ def trajectory(simulation: Mapping[str, Any]) -> Plot:
     ``simulation`` is ``info["simulation"]`` (docs/simulate.md): ``times``, ``series`` by name,
     ``status``, ``t_end``, ``rtol``, ``steps``, and optionally ``ode`` with the same shape.
     """
-    import matplotlib
+    import matplotlib  # heavy: imported only when there is something to draw
 
     times = [float(t) for t in simulation.get("times", [])]
     series = dict(simulation.get("series", {}))

@@ -1,20 +1,14 @@
-"""Simulation of an fmi-ls-dae FMU: DAE mode with IDA, ODE mode with CVODE, and the comparison.
+"""Simulation of an fmi-ls-dae FMU instance: DAE mode with IDA, ODE mode with CVODE.
 
-The pieces, each usable on its own (the integrators also take pure-Python systems, which is how
-the tests exercise them without a binary):
-
-    settings.py   Settings (tolerances, horizon, output times, budgets) and the Trajectory result
-    limits.py     our own limits (steps, wall clock, stalls, dg/dw condition) and the step loop
+    integrate.py  simulate_instance: one run of an instance in its mode (the public function)
     system.py     the FMU as a DAE residual or an ODE right-hand side, with coloured Jacobians
-    dae.py        consistent initialisation and IDA in DAE mode
-    ode.py        CVODE in ODE mode
-    compare.py    DAE against ODE trajectories at common output times
-    output.py     the CSV file
-    run.py        simulate one FMU from the parent process, through the probe worker
-    cli.py        ``lsdae simulate``
+    output.py     the CSV file of a trajectory
 
-The binary is only ever loaded in the probe worker process: ``lsdae check`` runs the simulation
-as probes (``conformance/probes/simulation.py``), and ``lsdae simulate`` runs the same probes
-with its own settings and reads the trajectory back from the report. Nothing here imports numpy
-or SUNDIALS at package import, so the command line stays quick to start.
+The integrators, their settings and limits, and the comparison of two runs are plain numerics
+(``conformance.numerics``: settings, limits, dae, ode, compare), tested without a binary. The
+simulation probes (``conformance.probes.simulation``) call
+:func:`~conformance.simulate.integrate.simulate_instance` inside the worker process; the
+``lsdae simulate`` command (``conformance.simulate_command``) runs those probes through the
+engine and reads the trajectories back from the report. Nothing is imported at package import,
+so the command line stays quick to start.
 """

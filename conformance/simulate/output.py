@@ -11,7 +11,7 @@ import io
 import math
 from pathlib import Path
 
-from .settings import Trajectory
+from ..numerics.settings import Trajectory
 
 
 def to_csv(traj: Trajectory) -> str:

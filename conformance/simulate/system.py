@@ -5,7 +5,7 @@
 derivatives (fmi3GetContinuousStateDerivatives) and the residuals (fmi3GetFloat64). Its partial
 derivatives ``d[f; g]/d[x; w]`` come from fmi3GetDirectionalDerivative, one call per group of
 columns that share no row in the *declared* sparsity (the manifest ``dependencies``; CPR
-colouring, ``conformance.probes.colouring``), which is what an importer does. Without directional
+colouring, ``conformance.numerics.colouring``), which is what an importer does. Without directional
 derivatives, coloured forward differences of the same evaluations stand in.
 
 :class:`FmuOde` drives an instance in ODE mode: states in, derivatives out, the FMU solving its
@@ -13,7 +13,7 @@ algebraic equations itself; the Jacobian ``df/dx`` is coloured by the modelDescr
 ContinuousStateDerivative dependencies. The algebraic variables are read at the output times.
 
 A call that returns fmi3Discard, or non-finite values, is an
-:class:`~conformance.simulate.limits.EvaluationFailed` the integrator may recover from by a
+:class:`~conformance.numerics.limits.EvaluationFailed` the integrator may recover from by a
 smaller step; fmi3Error and fmi3Fatal are not recoverable.
 """
 from __future__ import annotations
@@ -22,10 +22,10 @@ from typing import Iterable, Sequence
 
 import numpy as np
 
-from ..probes import colouring as col
-from ..probes import numdiff
-from ..probes.api import FmiError
-from .limits import EvaluationFailed
+from ..numerics import colouring as col
+from ..numerics import numdiff
+from ..numerics.limits import EvaluationFailed
+from ..runtime.errors import FmiError
 
 DIRECTIONAL, FINITE_DIFFERENCES = "directional derivatives", "finite differences"
 

@@ -16,14 +16,11 @@ from lxml import etree
 from conformance.manifest import MANIFEST, read_manifest
 from conformance.model import MODEL_DESCRIPTION, read_model_description
 from conformance.probes.api import Point
-from conformance.probes.session import (
-    CallRecord,
-    Instance,
-    Layout,
-    Library,
-    configure,
-    start_instance,
-)
+from conformance.runtime.callrecord import CallRecord
+from conformance.runtime.instance import Instance
+from conformance.runtime.layout import Layout
+from conformance.runtime.library import Library
+from conformance.runtime.modes import configure, start_instance
 from tests.scenes.Chain import chain
 
 N = 2000

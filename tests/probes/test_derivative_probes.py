@@ -15,10 +15,15 @@ import pytest
 from lxml import etree
 from scipy.optimize import fsolve
 
+from conformance.catalogue import default_catalogue
 from conformance.manifest import read_manifest
 from conformance.model import read_model_description
 from conformance.probes import derivatives as D
+from conformance.probes import dgdw
 from conformance.probes.api import FmiError, Point, ProbeContext, ProbeSkipped
+
+FAMILY = {**D.PROBES, **dgdw.PROBES}  # the derivative probes and the dg/dw probes
+OPTIONS = {r.code: r.option_values for r in default_catalogue()}  # the one place of defaults
 
 SCENES = Path(__file__).resolve().parents[1] / "scenes"
 H = 1e-30  # complex step: exact first derivatives (Squire & Trapp 1998)
@@ -182,9 +187,9 @@ def make_ctx(scene: str, *, seed: int = 0, manifest_edits=(), md_edits=(), count
 
 def found(ctx: ProbeContext, skipped: dict[str, str] | None = None) -> dict[str, list]:
     out = {}
-    for code, probe in D.PROBES.items():
+    for code, probe in FAMILY.items():
         try:
-            violations = list(probe(ctx))
+            violations = list(probe(ctx, **OPTIONS[code]))
         except ProbeSkipped as exc:
             if skipped is not None:
                 skipped[code] = str(exc)
@@ -215,7 +220,7 @@ def test_probes_say_why_they_cannot_run():
     ctx = make_ctx("SimpleDAE")
     ctx.dae = None
     found(ctx, skipped)
-    assert set(skipped) == set(D.PROBES)
+    assert set(skipped) == set(FAMILY)
     assert skipped["DAE745"].startswith("DAE mode could not be started")
 
 
@@ -386,7 +391,7 @@ def test_refused_directional_derivative_is_reported_once():
 
 def test_probe_errors_are_published_for_mismatches():
     ctx = make_ctx("SimpleDAE", dd_hook=_wrong(2, 1, -1.0))
-    list(D.directional_derivative_mismatch(ctx))
+    list(D.directional_derivative_mismatch(ctx, **OPTIONS["DAE740"]))
     errors = ctx.facts["info"]["probe_errors"]
     assert errors and errors[0]["rule"] == "DAE740"
     assert errors[0]["error"] > errors[0]["tolerance"]

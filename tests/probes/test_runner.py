@@ -12,11 +12,12 @@ from conformance.catalogue import Catalogue, default_catalogue
 from conformance.engine import EngineOptions, check_fmu, check_paths
 from conformance.findings import Severity
 from conformance.manifest import MANIFEST
-from conformance.probes import runner
+from conformance.probes import driver, runner
 from conformance.probes.api import Point
 from conformance.probes.registry import PROBES
 from conformance.probes.sampling import near_points, start_point
-from conformance.probes.session import CallRecord, Layout
+from conformance.runtime.callrecord import CallRecord
+from conformance.runtime.layout import Layout
 from tests.demo_legacy import FORMULATION_MANIFEST
 from tests.probes.variants import variant
 from tests.scenes.build import build_scene
@@ -66,8 +67,10 @@ def test_probe_registry_matches_probe_catalogue():
 
 
 def test_limits_come_from_the_catalogue():
-    limits = runner.Limits.from_rules({n: CATALOGUE[n] for n in runner.RUNNER_RULES})
-    assert limits == runner.Limits()  # the catalogue defaults are the documented defaults
+    rules = {n: CATALOGUE[n] for n in runner.RUNNER_RULES}
+    limits = runner.Limits.from_rules(rules)
+    options = {k: v for r in rules.values() for k, v in r.option_values.items()}
+    assert dataclasses.asdict(limits) == {k: options[k] for k in dataclasses.asdict(limits)}
     assert limits.probe_seconds > 0 and limits.fmu_seconds >= limits.probe_seconds
 
 
@@ -144,26 +147,26 @@ def test_legacy_manifest_shapes_are_probed(tmp_path, shape):
 
 def test_one_worker_per_fmu(monkeypatch):
     starts = []
-    original = runner._Driver._start
+    original = driver.Driver._start
 
     def counting(self):
         starts.append(1)
         return original(self)
 
-    monkeypatch.setattr(runner._Driver, "_start", counting)
+    monkeypatch.setattr(driver.Driver, "_start", counting)
     check_fmu(build_scene("SimpleDAE"), options=EngineOptions(probes=True))
     assert len(starts) == 1
 
 
 def test_fatal_status_restarts_the_worker_without_a_finding(monkeypatch):
     starts = []
-    original = runner._Driver._start
+    original = driver.Driver._start
 
     def counting(self):
         starts.append([r.code for r in self.remaining])
         return original(self)
 
-    monkeypatch.setattr(runner._Driver, "_start", counting)
+    monkeypatch.setattr(driver.Driver, "_start", counting)
     fmu = build_scene("HelloWorldDAE", defines=["DEFECT_FATAL_DIRECTIONAL"])
     report = check_fmu(fmu, options=EngineOptions(probes=True,
                                                   select=("DAE7",), ignore=("DAE74",)))

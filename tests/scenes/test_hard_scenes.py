@@ -26,6 +26,7 @@ import pytest
 from conformance.catalogue import default_catalogue
 from conformance.engine import EngineOptions, check_fmu
 from conformance.findings import thaw
+from tests.simkit import sim_settings
 from tests.scenes.build import SCENES_DIR, build_scene
 from tests.scenes.test_scenes import SCENES, Instance
 
@@ -56,7 +57,7 @@ def _code(name: str) -> str:
 
 def _simulator():
     pytest.importorskip("sksundae")
-    pytest.importorskip("conformance.simulate.dae")
+    pytest.importorskip("conformance.numerics.dae")
     from bench.sim_bench import SceneFmu
 
     return SceneFmu
@@ -125,11 +126,9 @@ def test_akzo_discards_where_sqrt_y2_is_undefined(make, dae):
 
 @pytest.mark.parametrize("mode", ["dae", "ode"])
 def test_akzo_reaches_the_test_set_reference_at_180(mode):
-    from conformance.simulate.settings import Settings
-
     fmu = _simulator()(build_scene("Akzo"))
     try:
-        settings = Settings(rtol=1e-9, stop_time=180.0, output_times=(180.0,),
+        settings = sim_settings(rtol=1e-9, stop_time=180.0, output_times=(180.0,),
                             max_steps=100_000, wall_seconds=SIMULATION_BUDGET_S)
         traj, _ = fmu.simulate(mode, settings, 180.0)
     finally:
@@ -167,11 +166,9 @@ def test_van_der_pol_impasse_is_reported_near_t_star_and_the_check_returns():
 
 
 def test_van_der_pol_matches_the_closed_form_before_the_impasse():
-    from conformance.simulate.settings import Settings
-
     fmu = _simulator()(build_scene("VanDerPolDAE"))
     try:
-        settings = Settings(rtol=1e-9, stop_time=0.6, output_times=(0.2, 0.4, 0.6),
+        settings = sim_settings(rtol=1e-9, stop_time=0.6, output_times=(0.2, 0.4, 0.6),
                             wall_seconds=SIMULATION_BUDGET_S)
         traj, _ = fmu.simulate("dae", settings, 0.6)
     finally:
@@ -279,11 +276,9 @@ FOURBAR_REFERENCE = {   # README.md: numpy twin, scipy DOP853 rtol 1e-13
 
 @pytest.mark.parametrize("name, lam_unit", [("FourBar", 1.0), ("FourBarScaled", 1e3)])
 def test_fourbar_reference_values_in_dae_mode(name, lam_unit):
-    from conformance.simulate.settings import Settings
-
     fmu = _simulator()(build_scene(name))
     try:
-        settings = Settings(rtol=1e-10, stop_time=0.5, output_times=tuple(FOURBAR_REFERENCE),
+        settings = sim_settings(rtol=1e-10, stop_time=0.5, output_times=tuple(FOURBAR_REFERENCE),
                             wall_seconds=SIMULATION_BUDGET_S)
         traj, _ = fmu.simulate("dae", settings, 0.5)
     finally:

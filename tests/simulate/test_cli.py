@@ -10,9 +10,9 @@ import csv
 
 import pytest
 
-from conformance.simulate.cli import add_parser, run
+from conformance.simulate_command import add_parser, run
 from tests.scenes.build import build_scene
-from tests.simulate.systems import VAN_DER_POL_IMPASSE
+from tests.numerics.systems import VAN_DER_POL_IMPASSE
 
 
 def _main(argv: list[str]) -> int:

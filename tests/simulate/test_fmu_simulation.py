@@ -9,10 +9,10 @@ import pytest
 
 from conformance.engine import EngineOptions, check_fmu
 from conformance.findings import thaw
-from conformance.simulate.run import simulate_fmu
-from conformance.simulate.settings import Settings
+from conformance.simulate_command import simulate_fmu
+from tests.simkit import sim_settings
 from tests.scenes.build import build_scene
-from tests.simulate.systems import ROBERTSON_REFERENCE, VAN_DER_POL_IMPASSE
+from tests.numerics.systems import ROBERTSON_REFERENCE, VAN_DER_POL_IMPASSE
 
 
 def _codes(result) -> set[str]:
@@ -25,7 +25,7 @@ def _codes(result) -> set[str]:
 @pytest.mark.parametrize(("rtol", "allowed"), [(1e-4, 1.0), (1e-5, 1.0), (1e-6, 1.5),
                                                (1e-8, 2.0)])
 def test_robertson_in_dae_mode_to_4e10_matches_the_reference(rtol, allowed):
-    settings = Settings(mode="dae", rtol=rtol, stop_time=4e10,
+    settings = sim_settings(mode="dae", rtol=rtol, stop_time=4e10,
                         output_times=tuple(ROBERTSON_REFERENCE))
     result = simulate_fmu(build_scene("Robertson"), settings)
     assert _codes(result) == set()
@@ -42,7 +42,7 @@ def test_robertson_in_dae_mode_to_4e10_matches_the_reference(rtol, allowed):
 def test_dae_and_ode_mode_agree_to_a_gap_that_shrinks_with_rtol(scene):
     differences = []
     for rtol in (1e-5, 1e-8):
-        result = simulate_fmu(build_scene(scene), Settings(mode="both", rtol=rtol))
+        result = simulate_fmu(build_scene(scene), sim_settings(mode="both", rtol=rtol))
         assert _codes(result) == set()
         dae, ode = result.trajectories
         assert dae.ok and ode.ok and (dae.mode, ode.mode) == ("dae", "ode")
@@ -54,7 +54,7 @@ def test_dae_and_ode_mode_agree_to_a_gap_that_shrinks_with_rtol(scene):
 
 def test_van_der_pol_impasse_is_a_finding_with_the_time_and_returns():
     started = time.monotonic()
-    result = simulate_fmu(build_scene("VanDerPolDAE"), Settings(mode="both"))
+    result = simulate_fmu(build_scene("VanDerPolDAE"), sim_settings(mode="both"))
     assert time.monotonic() - started < 20
     assert _codes(result) == {"DAE802"}
     [finding] = result.report.findings
@@ -67,7 +67,7 @@ def test_van_der_pol_impasse_is_a_finding_with_the_time_and_returns():
 def test_akzo_discard_region_is_a_finding_not_a_hang():
     started = time.monotonic()
     result = simulate_fmu(build_scene("Akzo", defines=["AKZO_NO_CO2_FEED"]),
-                          Settings(mode="both", stop_time=180.0))
+                          sim_settings(mode="both", stop_time=180.0))
     assert time.monotonic() - started < 20
     assert _codes(result) == {"DAE803"}
     event = dict(thaw(result.report.findings[0].evidence))["event"]
@@ -75,21 +75,21 @@ def test_akzo_discard_region_is_a_finding_not_a_hang():
 
 
 def test_akzo_with_its_feed_reaches_180():
-    result = simulate_fmu(build_scene("Akzo"), Settings(mode="both", stop_time=180.0))
+    result = simulate_fmu(build_scene("Akzo"), sim_settings(mode="both", stop_time=180.0))
     assert _codes(result) == set() and all(t.ok for t in result.trajectories)
 
 
 def test_four_bar_scaled_and_unscaled_give_the_same_verdict():
     verdicts = []
     for scene in ("FourBar", "FourBarScaled"):
-        result = simulate_fmu(build_scene(scene), Settings(mode="both", stop_time=0.5))
+        result = simulate_fmu(build_scene(scene), sim_settings(mode="both", stop_time=0.5))
         verdicts.append((_codes(result), [t.status for t in result.trajectories]))
     assert verdicts[0] == verdicts[1] == (set(), ["ok", "ok"])
 
 
 def test_a_crash_during_the_simulation_is_a_finding():
     result = simulate_fmu(build_scene("HelloWorldDAE", defines=["DEFECT_SEGFAULT_GETFLOAT64"]),
-                          Settings(mode="dae"))
+                          sim_settings(mode="dae"))
     assert "DAE701" in _codes(result) and result.trajectories == []
 
 

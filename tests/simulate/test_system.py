@@ -11,12 +11,14 @@ import pytest
 
 from conformance.manifest import MANIFEST, read_manifest
 from conformance.model import MODEL_DESCRIPTION, Unknown, read_model_description
-from conformance.probes.sampling import Layout
-from conformance.probes.session import CallRecord, Library, start_instance
-from conformance.simulate.dae import integrate_dae
-from conformance.simulate.settings import Settings
+from conformance.runtime.layout import Layout
+from conformance.runtime.callrecord import CallRecord
+from conformance.runtime.library import Library
+from conformance.runtime.modes import start_instance
+from conformance.numerics.dae import integrate_dae
 from conformance.simulate.system import FINITE_DIFFERENCES, FmuDae, FmuOde, pattern_from
 from conformance.xmlsafe import parse_xml
+from tests.simkit import sim_settings
 from tests.scenes.build import build_scene
 
 
@@ -85,7 +87,7 @@ def test_fallback_jacobian_integrates_robertson_too(loaded):
         inst = start_instance(library, "dae")
         system = FmuDae(inst, layout, manifest, use_directional=directional)
         y0 = inst.get_float64([*system.states, *system.algebraic])
-        runs.append(integrate_dae(system, Settings(rtol=1e-6), t0=0.0, y0=y0, stop=40.0))
+        runs.append(integrate_dae(system, sim_settings(rtol=1e-6), t0=0.0, y0=y0, stop=40.0))
         inst.free()
     assert all(r.ok for r in runs)
     assert runs[0].values[-1] == pytest.approx(runs[1].values[-1], rel=1e-4, abs=1e-10)

@@ -7,8 +7,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from conformance.probes import numdiff
-from conformance.probes.numdiff import EPS
+from conformance.numerics import numdiff
+from conformance.numerics.numdiff import EPS
 
 
 def along(fun, x0):

@@ -8,11 +8,12 @@ import math
 import numpy as np
 import pytest
 
-from conformance.simulate import settings as st
-from conformance.simulate.compare import compare
-from conformance.simulate.limits import Budget, Stop, scaled_condition
+from conformance.numerics import settings as st
+from conformance.numerics.compare import compare
+from conformance.numerics.limits import Budget, Stop, scaled_condition
 from conformance.simulate.output import to_csv
-from conformance.simulate.settings import Settings, Trajectory, parse_times
+from conformance.numerics.settings import Settings, Trajectory, parse_times
+from tests.simkit import sim_settings
 
 
 def _traj(mode: str, names, values, *, times=(0.0, 0.5, 1.0), rtol=1e-6, atol=None):
@@ -25,22 +26,23 @@ def _traj(mode: str, names, values, *, times=(0.0, 0.5, 1.0), rtol=1e-6, atol=No
 # ---------------------------------------------------------------------------------- settings
 
 def test_settings_from_catalogue_options_ignore_other_keys():
-    s = Settings.from_options({"rtol": 1e-4, "output_times": [1, 2], "factor": 100.0})
+    defaults = sim_settings().as_options()
+    s = Settings.from_options({**defaults, "rtol": 1e-4, "output_times": [1, 2], "factor": 100.0})
     assert s.rtol == 1e-4 and s.output_times == (1.0, 2.0)
     with pytest.raises(ValueError):
-        Settings.from_options({"mode": "sideways"})
+        Settings.from_options({**defaults, "mode": "sideways"})
 
 
 def test_stop_time_explicit_then_default_experiment_then_horizon():
-    assert Settings(stop_time=5.0).stop(0.0, 40.0) == 5.0
-    assert Settings().stop(0.0, 40.0) == 40.0
-    assert Settings(horizon=2.0).stop(1.0, None) == 3.0
-    assert Settings().stop(1.0, 0.5) == 2.0  # a DefaultExperiment stop before the start
+    assert sim_settings(stop_time=5.0).stop(0.0, 40.0) == 5.0
+    assert sim_settings().stop(0.0, 40.0) == 40.0
+    assert sim_settings(horizon=2.0).stop(1.0, None) == 3.0
+    assert sim_settings().stop(1.0, 0.5) == 2.0  # a DefaultExperiment stop before the start
 
 
 def test_output_times_grid_or_explicit():
-    assert Settings(output_points=5).times(0.0, 1.0) == pytest.approx([0, .25, .5, .75, 1])
-    explicit = Settings(output_times=(40.0, 0.4, 4e5, 0.4)).times(0.0, 100.0)
+    assert sim_settings(output_points=5).times(0.0, 1.0) == pytest.approx([0, .25, .5, .75, 1])
+    explicit = sim_settings(output_times=(40.0, 0.4, 4e5, 0.4)).times(0.0, 100.0)
     assert list(explicit) == [0.0, 0.4, 40.0]  # the start first, sorted, within the stop
 
 

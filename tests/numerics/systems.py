@@ -10,7 +10,7 @@ from typing import Callable
 
 import numpy as np
 
-from conformance.simulate.limits import EvaluationFailed
+from conformance.numerics.limits import EvaluationFailed
 
 # Reference solution of Robertson (tight-tolerance solutions, consistent with the Hairer test set)
 ROBERTSON_REFERENCE = {

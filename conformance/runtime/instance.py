@@ -1,42 +1,19 @@
-"""The :class:`~conformance.probes.api.Evaluator` on top of fmpy, used inside the worker process.
+"""One FMU instance, driven by value reference: the Evaluator once in Continuous-Time Mode.
 
-:class:`Library` loads the FMU's binary once (fmpy's ``FMU3Model``); every FMI call made through
-it goes through one choke point, ``_call``, which
-
-* writes the name of the call into the shared :class:`~conformance.probes.worker.CallRecord`
-  *before* calling, so that the runner can name the call in progress when the process crashes,
-  hangs or runs out of memory;
-* counts the call;
-* turns fmi3Discard, fmi3Error and fmi3Fatal into :class:`~conformance.probes.api.FmiError`
-  carrying the messages the FMU logged during that call.
-
-:class:`Instance` is one FMU instance: the handshake into Continuous-Time Mode in DAE or ODE mode
-(:func:`start_instance`), and ``evaluate``/``directional``/``adjoint`` by value reference, using
-the :class:`~conformance.probes.sampling.Layout` of the model (re-exported here). fmpy is
-imported lazily.
+``evaluate``/``directional``/``adjoint`` take a :class:`~conformance.runtime.point.Point` and read
+the unknowns asked for, using the :class:`~conformance.runtime.layout.Layout` of the model.
 """
 from __future__ import annotations
 
 import ctypes
-import logging
-import os
-from typing import Any, Callable, NamedTuple, Sequence
+from typing import Any, NamedTuple, Sequence
 
 import numpy as np
 
-from .api import FmiError, Point, ProbeSkipped
-from .sampling import Layout
-from .worker import CallRecord
+from .errors import FmiError, Unavailable
+from .library import Library
+from .point import Point
 
-__all__ = ["CallRecord", "Dependency", "Instance", "Layout", "Library", "PointNotSet",
-           "start_instance"]
-
-log = logging.getLogger(__name__)
-
-STATUS_NAMES = {0: "fmi3OK", 1: "fmi3Warning", 2: "fmi3Discard", 3: "fmi3Error", 4: "fmi3Fatal"}
-MAX_LOG_MESSAGES = 200          # per call; an FMU that floods its logger is cut off here
-MAX_MESSAGE_CHARS = 1000
-INIT_CALLS = ("fmi3EnterInitializationMode", "fmi3ExitInitializationMode")
 # fmi3DependencyKind in the order of the C enum; fmi3Independent has no XML counterpart (MS-13)
 DEPENDENCY_KINDS = ("independent", "constant", "fixed", "tunable", "discrete", "dependent")
 MAX_DEPENDENCIES = 10_000_000   # a larger count from the FMU is garbage, not an allocation
@@ -53,12 +30,13 @@ class Dependency(NamedTuple):
     dependent_element: int = 0
 
 
-class PointNotSet(ProbeSkipped):
+class PointNotSet(Unavailable):
     """Setting a point's knowns failed inside evaluate/directional/adjoint.
 
-    A :class:`ProbeSkipped`, not an :class:`FmiError`: the fault is a rejected set, which
-    ``algebraic-not-settable`` (algebraic variables) and ``evaluation-failed`` (time, states,
-    inputs) report; a probe that catches FmiError around an evaluation must not report it again.
+    An :class:`Unavailable` (a probe's ProbeSkipped), not an :class:`FmiError`: the fault is a
+    rejected set, which ``algebraic-not-settable`` (algebraic variables) and ``evaluation-failed``
+    (time, states, inputs) report; a probe that catches FmiError around an evaluation must not
+    report it again.
     ``error`` is the FmiError of the set.
     """
 
@@ -68,98 +46,6 @@ class PointNotSet(ProbeSkipped):
                          f"{error.status}{first}")
         self.point, self.error = point, error
 
-
-# ------------------------------------------------------------------------------ library
-
-_RECORDING_CLASS: Any = None
-
-
-def _recording_class() -> Any:
-    """fmpy's FMU3Model with every FMI call recorded, counted and checked (built lazily)."""
-    global _RECORDING_CLASS
-    if _RECORDING_CLASS is None:
-        from fmpy.fmi3 import FMU3Model
-
-        class RecordingFMU3Model(FMU3Model):  # type: ignore[misc, valid-type]
-            lsdae_record: CallRecord
-            lsdae_calls = 0
-            lsdae_log: list[str]
-            lsdae_blocked: frozenset[str] = frozenset()
-            lsdae_fatal = False
-
-            def _call(self, fname: str, *args: Any) -> Any:
-                function = self._functions[fname]
-                if fname in self.lsdae_blocked:  # not an FmiError: probes must not report it
-                    raise ProbeSkipped(f"{fname} is not called again: it did not return in an "
-                                       "earlier probe (binary-timed-out)")
-                del self.lsdae_log[:]  # the log holds the messages of the last call only
-                self.lsdae_record.enter(fname)
-                result = function(*args)
-                self.lsdae_record.leave()
-                self.lsdae_calls += 1
-                if function.restype is ctypes.c_int and result not in (0, 1):
-                    self.lsdae_fatal = self.lsdae_fatal or result == 4
-                    status = STATUS_NAMES.get(result, f"the illegal status {result}")
-                    raise FmiError(fname, status, self.lsdae_log)
-                return result
-
-        _RECORDING_CLASS = RecordingFMU3Model
-    return _RECORDING_CLASS
-
-
-class Library:
-    """The FMU's binary, loaded once per worker process; creates :class:`Instance` objects."""
-
-    def __init__(self, directory: str, layout: Layout, record: CallRecord, *,
-                 blocked: Sequence[str] = ()):
-        self.layout = layout
-        self.record = record
-        self.directory = directory
-        self.log: list[str] = []
-        self.instances: list[Instance] = []
-        cls = _recording_class()
-        # fmpy resolves every fmi3* symbol here (AR-07): a missing one raises. Loading runs
-        # the library's constructors, so it is recorded like a call.
-        record.enter("dlopen (loading the library)")
-        self.fmu = cls(guid=layout.token, modelIdentifier=layout.model_identifier,
-                       unzipDirectory=directory, instanceName="lsdae")
-        record.leave()
-        self.fmu.lsdae_record = record
-        self.fmu.lsdae_log = self.log
-        self.fmu.lsdae_blocked = frozenset(blocked)
-        resources = os.path.join(directory, "resources")
-        self.resource_path = resources + os.sep if os.path.isdir(resources) else None
-        self._count = 0
-
-    @property
-    def calls(self) -> int:
-        return self.fmu.lsdae_calls
-
-    @property
-    def fatal(self) -> bool:
-        """An FMI call returned fmi3Fatal: no instance of this library may be used again."""
-        return bool(self.fmu.lsdae_fatal)
-
-    def logger(self, name: str) -> Callable[..., None]:
-        def log_message(env: Any, status: int, category: bytes | None,
-                        message: bytes | None) -> None:
-            if len(self.log) >= MAX_LOG_MESSAGES:
-                return
-            text = (message or b"").decode("utf-8", "replace")[:MAX_MESSAGE_CHARS]
-            label = STATUS_NAMES.get(status, str(status)).removeprefix("fmi3")
-            self.log.append(f"[{label}] {name}: {text}")
-        return log_message
-
-    def next_name(self, mode: str) -> str:
-        self._count += 1
-        return f"lsdae-{mode}-{self._count}"
-
-    def free_all(self) -> None:
-        for inst in list(self.instances):
-            inst.free()
-
-
-# ------------------------------------------------------------------------------ instance
 
 def _vrs(values: Sequence[int]) -> Any:
     return (ctypes.c_uint * len(values))(*values)
@@ -177,7 +63,7 @@ class Instance:
     """
 
     def __init__(self, library: Library, *, name: str):
-        from fmpy.fmi3 import fmi3LogMessageCallback
+        from fmpy.fmi3 import fmi3LogMessageCallback  # fmpy: loaded under the memory limit
 
         self.library = library
         self.layout = library.layout
@@ -363,65 +249,3 @@ class Instance:
                   _doubles(seed), len(seed), out.ctypes.data_as(ctypes.POINTER(ctypes.c_double)),
                   n_out)
         return out
-
-
-# ----------------------------------------------------------------------------- handshake
-
-def configure(inst: Instance, value: bool) -> None:
-    """Configuration Mode: set the enable parameter (Instantiated -> Instantiated)."""
-    vr = inst.layout.enable
-    assert vr is not None
-    inst.enter_configuration_mode()
-    inst.set_boolean(vr, value)
-    inst.exit_configuration_mode()
-
-
-def reconfigure(inst: Instance, value: bool) -> None:
-    """Reconfiguration Mode: set the enable parameter (Event Mode -> Event Mode)."""
-    configure(inst, value)
-
-
-def start_instance(library: Library, mode: str, *, runtime_switch: bool = True) -> Instance:
-    """A new instance in Continuous-Time Mode, in ``mode`` ("dae" or "ode").
-
-    DAE mode: Configuration Mode with the switch set true, then the ordinary initialisation
-    (DAE-12). An FMU without an enable parameter is permanently in DAE mode and is initialised
-    without Configuration Mode. Under alpha.1 an FMU may refuse to initialise in DAE mode
-    (DAE-14); then, when the switch is tunable and ``runtime_switch`` is true, the instance is
-    initialised in ODE mode and switched in Reconfiguration Mode (DAE-13).
-    """
-    layout = library.layout
-    if mode == "ode" and layout.enable_status != "ok":
-        raise ProbeSkipped("the FMU has no usable enable parameter, hence no ODE mode"
-                           if layout.enable_status == "unusable" else
-                           "the FMU has no enable parameter: it is permanently in DAE mode")
-    if mode == "dae" and layout.enable_status == "unusable":
-        raise ProbeSkipped("the enable parameter cannot be used (see the static findings)")
-    inst = Instance(library, name=library.next_name(mode))
-    try:
-        if mode == "dae" and layout.enable is not None:
-            configure(inst, True)
-        try:
-            inst.enter_initialization_mode(layout.start_time)
-            inst.exit_initialization_mode()
-            inst.started = "configuration"
-        except FmiError as exc:
-            if not (mode == "dae" and runtime_switch and layout.enable_tunable
-                    and exc.call in INIT_CALLS):
-                raise
-            inst.free()
-            inst = Instance(library, name=library.next_name(mode))
-            inst.enter_initialization_mode(layout.start_time)
-            inst.exit_initialization_mode()
-            reconfigure(inst, True)
-            inst.started = "runtime-switch"
-        inst.update_discrete_states()
-        inst.enter_continuous_time_mode()
-    except BaseException:
-        try:
-            inst.free()
-        except FmiError:
-            pass
-        raise
-    inst.mode = mode
-    return inst

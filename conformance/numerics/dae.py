@@ -12,7 +12,7 @@ on Robertson at rtol 1e-4 it took 12 times more steps and ended 16 times less ac
 Tolerances are per variable: ``atol_i = atol_factor * rtol * nominal_i``. A scalar atol fails on
 Robertson, where y2 (nominal 1e-5) falls to 1e-13 while y1 and y3 are of order 1.
 
-A failed evaluation (:class:`~conformance.simulate.limits.EvaluationFailed`) that is recoverable
+A failed evaluation (:class:`~conformance.numerics.limits.EvaluationFailed`) that is recoverable
 (fmi3Discard), or non-finite values, fill the residual with NaN: IDA's Newton iteration then
 fails to converge, which IDA treats as recoverable and answers by cutting the step (scikit-sundae
 offers no other way to return a recoverable error). Only when that does not help does the run
@@ -227,7 +227,7 @@ def integrate_dae(system: DaeSystem, settings: Settings, *, t0: float, y0: np.nd
 
     Never raises for a bad model: every way a run can end is a :class:`Trajectory` status.
     """
-    from sksundae.ida import IDA
+    from sksundae.ida import IDA  # SUNDIALS: loaded only when a DAE is integrated
 
     times = settings.times(t0, stop) if times is None else np.asarray(times, dtype=float)
     n = system.nx + system.nw

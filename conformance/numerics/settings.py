@@ -21,21 +21,25 @@ OK, SOLVER, SINGULAR, FMU_FAILED, BUDGET, INIT = (
 
 @dataclass(frozen=True)
 class Settings:
-    """How to simulate. Times in the model's time unit, budgets per run (one mode)."""
+    """How to simulate. Times in the model's time unit, budgets per run (one mode).
 
-    mode: str = "both"                  # dae | ode | both
-    rtol: float = 1e-6
-    atol_factor: float = 1.0            # atol_i = atol_factor * rtol * nominal_i
-    stop_time: float = 0.0              # 0: DefaultExperiment stopTime, else start + horizon
-    horizon: float = 1.0
-    output_points: int = 101            # an even grid from start to stop, both included
+    The defaults are the options of the ``simulation-failed`` rule in the catalogue (the one
+    place they are written): callers build Settings with :meth:`from_options` from them.
+    """
+
+    mode: str                           # dae | ode | both
+    rtol: float
+    atol_factor: float                  # atol_i = atol_factor * rtol * nominal_i
+    stop_time: float                    # 0: DefaultExperiment stopTime, else start + horizon
+    horizon: float
+    output_points: int                  # an even grid from start to stop, both included
+    max_steps: int
+    wall_seconds: float
+    stall_steps: int                    # steps without progress in time before giving up
+    max_condition: float                # stop when the scaled dg/dw condition exceeds this
+    stalled_condition: float            # a run that stalls or fails with dg/dw this bad: singular
+    record_wall_time: bool              # wall_s in the report (not reproducible: off in check)
     output_times: tuple[float, ...] = ()  # explicit output times (replace the grid)
-    max_steps: int = 20000
-    wall_seconds: float = 8.0
-    stall_steps: int = 200              # steps without progress in time before giving up
-    max_condition: float = 1e12         # stop when the scaled dg/dw condition exceeds this
-    stalled_condition: float = 1e8      # a run that stalls or fails with dg/dw this bad: singular
-    record_wall_time: bool = False      # wall_s in the report (not reproducible: off in check)
 
     @classmethod
     def from_options(cls, options: Mapping[str, Any]) -> Settings:

@@ -4,10 +4,12 @@
                        [--output-times t1,t2,...] [-o trajectory.csv]
 
 The binary is loaded only in the probe worker process, as for ``lsdae check``: this command runs
-the simulation probes (``conformance/probes/simulation.py``) through the engine with its own
-settings (a copy of the catalogue whose ``simulation-failed`` options are the command line's,
-and whose time limits fit the budget), then reads the trajectory back from the report. A crash
-or hang of the FMU is a finding, never a traceback.
+the simulation probes (``conformance/probes/simulation.py``, which call
+:func:`conformance.simulate.integrate.simulate_instance`) through the engine with its own settings
+(:func:`simulate_fmu`: a copy of the catalogue whose ``simulation-failed`` options are the
+command line's, and whose time limits fit the budget), then reads the trajectories back from the
+report's ``info["simulation"]``. A crash or hang of the FMU is a ``binary-*`` finding, never a
+traceback. It sits above the engine, beside ``cli``.
 
 Exit codes: 0 the stop time was reached without a finding, 1 a finding (the trajectory up to
 where the run ended is still written), 2 usage error or nothing could be simulated.
@@ -15,9 +17,102 @@ where the run ended is still written), 2 usage error or nothing could be simulat
 from __future__ import annotations
 
 import argparse
+import dataclasses
+import os
 import sys
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
+
+from .catalogue import Catalogue, default_catalogue
+from .engine import EngineOptions, check_fmu
+from .findings import Report, Severity, thaw
+from .fmu import MODEL_DESCRIPTION, ArchiveReadError, open_fmu
+from .reporters import REPORTER_BY_NAME
+from .xmlsafe import parse_xml
+
+RULES_BY_MODE = {"dae": ("DAE801", "DAE802", "DAE803", "DAE804"),
+                 "ode": ("DAE801", "DAE803", "DAE804"),
+                 "both": ("DAE801", "DAE802", "DAE803", "DAE804", "DAE805")}
+# Archive, XML and engine pseudo-rules, and the runner's binary-* rules: a broken FMU says why.
+ALWAYS = ("DAE0", "DAE70")
+RUNNER_MARGIN_S = 30.0
+
+
+@dataclass
+class Simulation:
+    """What one FMU's simulation gave: the report (findings, skipped rules), the runs (DAE mode
+    first), the comparison of the two modes, and the catalogue used (for reporters)."""
+
+    report: Any
+    catalogue: Any
+    trajectories: list[Any] = field(default_factory=list)  # Trajectory
+    comparison: dict[str, Any] | None = None
+
+    def skipped(self) -> list[str]:
+        """Why rules of this simulation did not run (distinct reasons, in code order)."""
+        codes = set(RULES_BY_MODE["both"])
+        return list(dict.fromkeys(r for c, r in sorted(self.report.rules_skipped)
+                                  if c in codes))
+
+
+def default_stop_time(path: Path | str) -> float | None:
+    """The DefaultExperiment's stopTime, read safely; None when absent or unreadable."""
+    source, _ = open_fmu(Path(path))
+    if source is None:
+        return None
+    with source:
+        try:
+            data = source.read(MODEL_DESCRIPTION)
+        except (KeyError, ArchiveReadError, OSError):
+            return None
+    tree, _ = parse_xml(data, file=MODEL_DESCRIPTION)
+    element = tree.getroot().find("DefaultExperiment") if tree is not None else None
+    try:
+        return float(element.get("stopTime")) if element is not None else None
+    except (TypeError, ValueError):
+        return None
+
+
+def simulation_catalogue(settings: Any, *, time_limit: float | None = None) -> Catalogue:
+    """The default catalogue with ``settings`` as the options of simulation-failed, and the
+    runner's time limits raised above the wall-clock budget (``time_limit``, per run)."""
+    limit = settings.wall_seconds if time_limit is None else time_limit
+    runs = 2 if settings.mode == "both" else 1
+    rules = []
+    for rule in default_catalogue():
+        if rule.name == "simulation-failed":
+            rule = dataclasses.replace(rule, options=tuple(sorted(
+                {**rule.option_values, **settings.as_options(),
+                 "output_times": tuple(settings.output_times)}.items())))
+        elif rule.name == "binary-timed-out":
+            # the confirmation runs of ode-dae-trajectory-mismatch take up to one budget more
+            rule = dataclasses.replace(rule, options=tuple(sorted({
+                **rule.option_values, "probe_seconds": 2 * limit + RUNNER_MARGIN_S,
+                "fmu_seconds": (runs + 1) * limit + 2 * RUNNER_MARGIN_S}.items())))
+        rules.append(rule)
+    return Catalogue(rules)
+
+
+def simulate_fmu(path: Path | str, settings: Any) -> Simulation:
+    """Simulate the FMU at ``path`` (file or folder) as ``settings`` say; never raises for a
+    bad FMU (its faults are findings of the report)."""
+    catalogue = simulation_catalogue(settings)
+    options = EngineOptions(select=(*ALWAYS, *RULES_BY_MODE[settings.mode]), probes_only=True)
+    report = check_fmu(Path(path), options=options, catalogue=catalogue, display_path=str(path))
+    info = thaw(report.info)
+    simulation = info.get("simulation") if isinstance(info, dict) else None
+    result = Simulation(report, catalogue)
+    if isinstance(simulation, dict) and simulation.get("times") is not None:
+        from .numerics.settings import Trajectory  # numpy: only once a run is read back
+
+        result.trajectories.append(Trajectory.from_info(simulation))
+        if isinstance(simulation.get("ode"), dict):
+            result.trajectories.append(Trajectory.from_info(simulation["ode"]))
+        if isinstance(simulation.get("comparison"), dict):
+            result.comparison = simulation["comparison"]
+    return result
+
 
 EXIT_OK, EXIT_FINDINGS, EXIT_USAGE = 0, 1, 2
 
@@ -35,7 +130,7 @@ def _positive(kind: type) -> Any:
 
 
 def _times(text: str) -> tuple[float, ...]:
-    from .settings import parse_times
+    from .numerics.settings import parse_times  # numpy: only when the option is given
 
     try:
         return parse_times(text)
@@ -75,9 +170,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
 
 def run(args: argparse.Namespace) -> int:
     """Run ``lsdae simulate``; returns the exit code."""
-    from ..findings import Severity
-    from .run import default_stop_time, simulate_fmu
-    from .settings import Settings
+    from .numerics.settings import Settings  # numpy: only when simulating
 
     path = Path(args.fmu)
     if not path.exists():
@@ -87,10 +180,11 @@ def run(args: argparse.Namespace) -> int:
         print("lsdae: --rtol must be below 1", file=sys.stderr)
         return EXIT_USAGE
     stop = args.stop_time or default_stop_time(path) or 0.0
-    settings = Settings(mode=args.mode, rtol=args.rtol, stop_time=stop,
-                        output_points=args.output_points,
-                        output_times=tuple(args.output_times or ()), max_steps=args.max_steps,
-                        wall_seconds=args.time_limit, record_wall_time=True)
+    options = dict(default_catalogue()["simulation-failed"].option_values)  # the defaults
+    settings = Settings(**{
+        **options, "mode": args.mode, "rtol": args.rtol, "stop_time": stop,
+        "output_points": args.output_points, "output_times": tuple(args.output_times or ()),
+        "max_steps": args.max_steps, "wall_seconds": args.time_limit, "record_wall_time": True})
     result = simulate_fmu(path, settings)
     for traj in result.trajectories:
         sys.stdout.write(summary(traj))
@@ -142,7 +236,7 @@ def _comparison_line(comparison: dict) -> str:
 
 
 def _write(args: argparse.Namespace, trajectories: list) -> bool:
-    from .output import write_csv
+    from .simulate.output import write_csv  # numpy: only when writing
 
     targets = [(args.output, trajectories[0] if trajectories else None)]
     if args.ode_output:
@@ -163,11 +257,6 @@ def _write(args: argparse.Namespace, trajectories: list) -> bool:
 
 
 def _print_findings(report: Any, catalogue: Any, color: str) -> None:
-    import os
-
-    from ..findings import Report
-    from ..reporters import REPORTER_BY_NAME
-
     use = color == "always" or (color == "auto" and sys.stdout.isatty()
                                 and not os.environ.get("NO_COLOR"))
     text = REPORTER_BY_NAME["console"](Report(tool_version="", fmus=(report,)), catalogue,

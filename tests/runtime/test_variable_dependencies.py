@@ -18,15 +18,11 @@ from lxml import etree
 from conformance.manifest import MANIFEST, Manifest, read_manifest
 from conformance.model import MODEL_DESCRIPTION, ModelDescription, Unknown, read_model_description
 from conformance.probes.api import FmiError
-from conformance.probes.session import (
-    CallRecord,
-    Dependency,
-    Instance,
-    Layout,
-    Library,
-    configure,
-    start_instance,
-)
+from conformance.runtime.callrecord import CallRecord
+from conformance.runtime.instance import Dependency, Instance
+from conformance.runtime.layout import Layout
+from conformance.runtime.library import Library
+from conformance.runtime.modes import configure, start_instance
 from tests.scenes.build import build_scene
 from tests.scenes.Chain import chain
 

@@ -6,7 +6,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from conformance.probes import colouring as col
+from conformance.numerics import colouring as col
+from conformance.numerics import measure
 
 
 def banded(n: int, half: int = 1) -> col.Pattern:
@@ -110,7 +111,8 @@ def _measure(n, **kw):
     p = banded(n)
     c = col.colour_columns(p)
     steps = np.full(n, 1e-5)
-    return col.measure(col.Sources(fun, dd, adj), p, c, steps, x0, np.random.default_rng(0)), p, c
+    sources = measure.Sources(fun, dd, adj)
+    return measure.measure(sources, p, c, steps, x0, np.random.default_rng(0)), p, c
 
 
 def test_clean_measurement_costs_a_number_of_calls_independent_of_the_size():

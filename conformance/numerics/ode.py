@@ -39,7 +39,7 @@ def integrate_ode(system: OdeSystem, settings: Settings, *, t0: float, x0: np.nd
                   algebraic_nominal: np.ndarray | None = None) -> Trajectory:
     """Integrate ``x' = f(t, x)`` from ``x0`` at ``t0`` to ``stop``; never raises for a bad
     model: every way a run can end is a :class:`Trajectory` status."""
-    from sksundae.cvode import CVODE
+    from sksundae.cvode import CVODE  # SUNDIALS: loaded only when an ODE is integrated
 
     times = settings.times(t0, stop) if times is None else np.asarray(times, dtype=float)
     nx, nw = system.nx, len(system.algebraic_names)

@@ -1,0 +1,138 @@
+"""The probe stage inside the worker process: load the binary, start the modes, run the probes.
+
+The supervisor's child (``conformance.runtime.child``) calls :func:`run_job` with a
+:class:`~conformance.runtime.protocol.Job` whose payload is a :class:`ProbeJob`. It loads the
+binary, brings one instance into Continuous-Time Mode in DAE mode and one in ODE mode, samples
+the points, and runs each probe in turn, sending one JSON event per step:
+
+    {"event": "ready", "info": {...}}             setup done (points, seed)
+    {"event": "load-failed", "violation": {...}}  the binary cannot be loaded
+    {"event": "start", "code": "DAE7xx"}
+    {"event": "done", "code": ..., "violations": [...], "skipped": reason|null, "info": {...}}
+    {"event": "memory", "code": ...}              Python itself ran out of memory
+    {"event": "fatal", "code": ...}               a call returned fmi3Fatal: this process stops,
+                                                  a fresh one runs the remaining probes
+    {"event": "end"}
+
+The runner (``conformance.probes.runner``) reads them and decides what a death means.
+"""
+from __future__ import annotations
+
+import mmap
+import os
+import sys
+import traceback
+from dataclasses import dataclass, field
+from typing import Any, Callable
+
+import numpy as np
+
+from ..findings import Location, Violation, evidence
+from ..runtime.callrecord import CallRecord
+from ..runtime.child import memory_info
+from ..runtime.layout import Layout
+from ..runtime.library import Library
+from ..runtime.modes import start_instance
+from ..runtime.protocol import MEMORY_EXIT, Job, violation_json
+from .api import FmiError, ProbeContext, ProbeSkipped
+from .registry import PROBES
+from .sampling import near_points, points_info, start_point
+
+ENTRY = "conformance.probes.stage:run_job"
+
+
+@dataclass
+class ProbeJob:
+    """The payload of a probe job: what the probes run on, and which probes with which options."""
+
+    model: Any                     # ModelDescription
+    manifest: Any                  # Manifest | None
+    draft: str | None
+    seed: int
+    probes: list[tuple[str, str, dict[str, Any]]] = field(default_factory=list)  # code, name, opts
+
+
+def run_job(job: Job, send: Callable[[dict[str, Any]], None]) -> int:
+    """The child's entry point: run the probes of ``job``; returns the exit status."""
+    return _Stage(job, send).run()
+
+
+class _Stage:
+    def __init__(self, job: Job, send: Callable[[dict[str, Any]], None]):
+        self.job = job
+        self.payload: ProbeJob = job.payload
+        self.send = send
+
+    def run(self) -> int:
+        with open(self.job.call_file, "r+b") as fh:
+            record = CallRecord(mmap.mmap(fh.fileno(), CallRecord.SIZE))
+        record.set_probe("setup")
+        model = self.payload.model
+        layout = Layout.build(model, self.payload.manifest)
+        try:
+            library = Library(self.job.directory, layout, record, blocked=self.job.blocked)
+        except Exception as exc:  # fmpy raises plain Exception or AttributeError here
+            error = str(exc).replace(self.job.directory + os.sep, "")  # the path in the FMU
+            self.send({"event": "load-failed", "violation": violation_json(Violation(
+                f"the binary cannot be loaded: {error}", Location(),
+                evidence(error=error, exception=type(exc).__name__)))})
+            return 0
+        ctx = self._context(library, layout)
+        self.send({"event": "ready", "info": ctx.facts["info"], "memory": memory_info()})
+        for code, name, options in self.payload.probes:
+            self._probe(ctx, record, code, name, options)
+            if library.fatal:  # every instance is invalid now (SM-04): start afresh
+                self.send({"event": "fatal", "code": code})
+                return 0
+        record.set_probe("teardown")
+        library.free_all()
+        self.send({"event": "end"})
+        return 0
+
+    def _context(self, library: Library, layout: Layout) -> ProbeContext:
+        facts: dict[str, Any] = {"layout": layout, "library": library, "info": {}}
+        evaluators: dict[str, Any] = {}
+        for mode in ("dae", "ode"):
+            try:
+                evaluators[mode] = start_instance(library, mode)
+            except (FmiError, ProbeSkipped) as exc:
+                evaluators[mode] = None
+                facts[f"{mode}_error"] = exc
+        start = start_point(evaluators["dae"] or evaluators["ode"], layout,
+                            facts.setdefault("start_nonfinite", {}))
+        rng = np.random.default_rng(self.payload.seed)
+        points = [start, *near_points(start, layout, rng)]
+        facts["info"].update(points_info(points, layout, self.payload.seed))
+        return ProbeContext(
+            model=self.payload.model, manifest=self.payload.manifest, draft=self.payload.draft,
+            seed=self.payload.seed, rng=rng, points=points, dae=evaluators["dae"],
+            ode=evaluators["ode"], new_instance=lambda mode: start_instance(library, mode),
+            facts=facts)
+
+    def _probe(self, ctx: ProbeContext, record: CallRecord, code: str, name: str,
+               options: dict[str, Any]) -> None:
+        record.set_probe(code)
+        self.send({"event": "start", "code": code})
+        violations: list[Any] = []
+        skipped = None
+        try:
+            for v in PROBES[code](ctx, **options):
+                violations.append(v)
+        except ProbeSkipped as exc:
+            skipped = str(exc) or "skipped by the probe"
+        except FmiError as exc:
+            first = f": {exc.log[0]}" if exc.log else ""
+            skipped = f"{exc.call} returned {exc.status}{first}"
+        except MemoryError:
+            violations.clear()
+            self.send({"event": "memory", "code": code})
+            sys.stderr.flush()
+            os._exit(MEMORY_EXIT)
+        except Exception as exc:  # a defect of ours: report it, run the next probe
+            violations.append(Violation(
+                f"probe {code} {name} failed: {type(exc).__name__}: {exc}",
+                evidence=evidence(rule=code, traceback=traceback.format_exc(limit=8)),
+                rule="internal-error"))
+        self.send({"event": "done", "code": code,
+                   "violations": [violation_json(v) for v in violations],
+                   "skipped": skipped, "info": ctx.facts.get("info", {})})

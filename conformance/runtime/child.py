@@ -1,0 +1,106 @@
+"""The worker process: the only process that loads the FMU's binary.
+
+    python -m conformance.runtime.child JOB_FILE ADDRESS_SPACE_BYTES
+
+The supervisor starts it with a private temporary directory as its working directory. The child
+limits its own address space first (before numpy or fmpy are imported), keeps the original stdout
+as its private channel and points file descriptor 1 at stderr, so whatever the FMU prints cannot
+corrupt the channel. It then reads the pickled :class:`~conformance.runtime.protocol.Job` and
+calls the job's entry point, which sends JSON events (see ``conformance.probes.stage``). An
+exception of ours outside the entry is sent as ``{"event": "worker-error"}``; a MemoryError as
+``{"event": "memory"}`` with exit status ``MEMORY_EXIT``.
+"""
+from __future__ import annotations
+
+import ctypes
+import importlib
+import json
+import os
+import pickle
+import signal
+import sys
+import traceback
+from typing import Any
+
+from .protocol import MEMORY_EXIT, json_default
+
+try:
+    import resource
+except ImportError:  # pragma: no cover - not POSIX: no address-space limit
+    resource = None  # type: ignore[assignment]
+
+
+def _limit_memory(limit: int) -> None:
+    if resource is not None and limit > 0:
+        resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
+
+
+def _die_with_parent() -> None:
+    """Linux: be killed when the parent dies, so a hung FMU never outlives lsdae."""
+    if not sys.platform.startswith("linux"):
+        return
+    try:
+        libc = ctypes.CDLL(None, use_errno=True)
+        libc.prctl(1, signal.SIGKILL, 0, 0, 0)  # PR_SET_PDEATHSIG
+    except (OSError, AttributeError):
+        return
+    parent = os.environ.get("LSDAE_PROBE_PARENT", "")
+    if parent.isdigit() and os.getppid() != int(parent):  # it died before prctl took effect
+        os._exit(1)
+
+
+def _channel() -> Any:
+    """Keep the original stdout for the protocol; make fd 1 an alias of stderr."""
+    fd = os.dup(1)
+    os.dup2(2, 1)
+    sys.stdout = sys.stderr
+    return os.fdopen(fd, "w", buffering=1, encoding="utf-8")
+
+
+def memory_info() -> dict[str, int]:
+    """VmSize and VmRSS in bytes (Linux), so the supervisor can judge a later death."""
+    out: dict[str, int] = {}
+    try:
+        with open("/proc/self/status", encoding="ascii") as fh:
+            for line in fh:
+                key, _, rest = line.partition(":")
+                if key in ("VmSize", "VmRSS"):
+                    out[key] = int(rest.split()[0]) * 1024
+    except (OSError, ValueError, IndexError):
+        pass
+    return out
+
+
+def main(argv: list[str]) -> int:
+    if len(argv) != 3:
+        print("usage: python -m conformance.runtime.child JOB_FILE ADDRESS_SPACE_BYTES",
+              file=sys.stderr)
+        return 2
+    _die_with_parent()
+    _limit_memory(int(argv[2]))
+    channel = _channel()
+
+    def send(message: dict[str, Any]) -> None:
+        channel.write(json.dumps(message, default=json_default) + "\n")
+        channel.flush()
+
+    try:
+        with open(argv[1], "rb") as fh:
+            job = pickle.load(fh)
+        module, _, function = job.entry.partition(":")
+        # the entry (and numpy, fmpy with it) is imported only now, under the memory limit
+        status = getattr(importlib.import_module(module), function)(job, send)
+    except MemoryError:
+        send({"event": "memory", "code": ""})
+        status = MEMORY_EXIT
+    except Exception as exc:  # a defect of ours outside any probe: say so, not "crashed"
+        send({"event": "worker-error", "error": f"{type(exc).__name__}: {exc}",
+              "traceback": traceback.format_exc(limit=8)})
+        status = 0
+    channel.flush()
+    sys.stderr.flush()
+    os._exit(status)  # no library unloading, no atexit: everything was reported
+
+
+if __name__ == "__main__":
+    main(sys.argv)

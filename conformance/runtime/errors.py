@@ -1,0 +1,26 @@
+"""What a call into the FMU's binary can end in, besides a value.
+
+:class:`FmiError` is an FMI call that returned fmi3Discard, fmi3Error or fmi3Fatal (where a value
+was needed), with the messages the FMU logged during that call. :class:`Unavailable` says that
+what was asked cannot be done on this FMU (no ODE mode without an enable parameter, a function
+not called again after it hung); its message is the reason. The probe stage reports both as the
+reason a rule did not run (``conformance.probes.api.ProbeSkipped`` is :class:`Unavailable`).
+"""
+from __future__ import annotations
+
+from typing import Sequence
+
+
+class FmiError(Exception):
+    """An FMI call returned fmi3Error/fmi3Fatal (or fmi3Discard where a value was needed).
+
+    ``call`` is the FMI function name, ``status`` its status name, ``log`` the FMU's messages.
+    """
+
+    def __init__(self, call: str, status: str, log: Sequence[str] = ()):
+        super().__init__(f"{call} returned {status}")
+        self.call, self.status, self.log = call, status, tuple(log)
+
+
+class Unavailable(Exception):
+    """What was asked cannot be done on this FMU; the message is the reason."""

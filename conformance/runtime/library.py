@@ -1,0 +1,114 @@
+"""The FMU's binary, loaded once per worker process (fmpy's ``FMU3Model``).
+
+Every FMI call made through a :class:`Library` goes through one choke point, ``_call``, which
+
+* writes the name of the call into the shared :class:`~conformance.runtime.callrecord.CallRecord`
+  *before* calling, so that the supervisor can name the call in progress when the process
+  crashes, hangs or runs out of memory;
+* counts the call;
+* turns fmi3Discard, fmi3Error and fmi3Fatal into :class:`~conformance.runtime.errors.FmiError`
+  carrying the messages the FMU logged during that call.
+
+fmpy is imported lazily (it is heavy, and the worker sets its memory limit first).
+"""
+from __future__ import annotations
+
+import ctypes
+import os
+from typing import Any, Callable, Sequence
+
+from .callrecord import CallRecord
+from .errors import FmiError, Unavailable
+from .layout import Layout
+
+STATUS_NAMES = {0: "fmi3OK", 1: "fmi3Warning", 2: "fmi3Discard", 3: "fmi3Error", 4: "fmi3Fatal"}
+MAX_LOG_MESSAGES = 200          # per call; an FMU that floods its logger is cut off here
+MAX_MESSAGE_CHARS = 1000
+
+
+_RECORDING_CLASS: Any = None
+
+
+def _recording_class() -> Any:
+    """fmpy's FMU3Model with every FMI call recorded, counted and checked (built lazily)."""
+    global _RECORDING_CLASS
+    if _RECORDING_CLASS is None:
+        from fmpy.fmi3 import FMU3Model  # fmpy: loaded under the worker's memory limit
+
+        class RecordingFMU3Model(FMU3Model):  # type: ignore[misc, valid-type]
+            lsdae_record: CallRecord
+            lsdae_calls = 0
+            lsdae_log: list[str]
+            lsdae_blocked: frozenset[str] = frozenset()
+            lsdae_fatal = False
+
+            def _call(self, fname: str, *args: Any) -> Any:
+                function = self._functions[fname]
+                if fname in self.lsdae_blocked:  # not an FmiError: nobody must report it as one
+                    raise Unavailable(f"{fname} is not called again: it did not return in an "
+                                       "earlier probe (binary-timed-out)")
+                del self.lsdae_log[:]  # the log holds the messages of the last call only
+                self.lsdae_record.enter(fname)
+                result = function(*args)
+                self.lsdae_record.leave()
+                self.lsdae_calls += 1
+                if function.restype is ctypes.c_int and result not in (0, 1):
+                    self.lsdae_fatal = self.lsdae_fatal or result == 4
+                    status = STATUS_NAMES.get(result, f"the illegal status {result}")
+                    raise FmiError(fname, status, self.lsdae_log)
+                return result
+
+        _RECORDING_CLASS = RecordingFMU3Model
+    return _RECORDING_CLASS
+
+
+class Library:
+    """The FMU's binary, loaded once per worker process; the instances made from it."""
+
+    def __init__(self, directory: str, layout: Layout, record: CallRecord, *,
+                 blocked: Sequence[str] = ()):
+        self.layout = layout
+        self.record = record
+        self.directory = directory
+        self.log: list[str] = []
+        self.instances: list[Any] = []  # the live Instances; each registers itself
+        cls = _recording_class()
+        # fmpy resolves every fmi3* symbol here (AR-07): a missing one raises. Loading runs
+        # the library's constructors, so it is recorded like a call.
+        record.enter("dlopen (loading the library)")
+        self.fmu = cls(guid=layout.token, modelIdentifier=layout.model_identifier,
+                       unzipDirectory=directory, instanceName="lsdae")
+        record.leave()
+        self.fmu.lsdae_record = record
+        self.fmu.lsdae_log = self.log
+        self.fmu.lsdae_blocked = frozenset(blocked)
+        resources = os.path.join(directory, "resources")
+        self.resource_path = resources + os.sep if os.path.isdir(resources) else None
+        self._count = 0
+
+    @property
+    def calls(self) -> int:
+        return self.fmu.lsdae_calls
+
+    @property
+    def fatal(self) -> bool:
+        """An FMI call returned fmi3Fatal: no instance of this library may be used again."""
+        return bool(self.fmu.lsdae_fatal)
+
+    def logger(self, name: str) -> Callable[..., None]:
+        def log_message(env: Any, status: int, category: bytes | None,
+                        message: bytes | None) -> None:
+            if len(self.log) >= MAX_LOG_MESSAGES:
+                return
+            text = (message or b"").decode("utf-8", "replace")[:MAX_MESSAGE_CHARS]
+            label = STATUS_NAMES.get(status, str(status)).removeprefix("fmi3")
+            self.log.append(f"[{label}] {name}: {text}")
+        return log_message
+
+    def next_name(self, mode: str) -> str:
+        self._count += 1
+        return f"lsdae-{mode}-{self._count}"
+
+    def free_all(self) -> None:
+        for inst in list(self.instances):
+            inst.free()

@@ -51,8 +51,8 @@ from conformance.probes import derivatives as D
 from conformance.probes import jacobian as J
 from conformance.probes import numdiff
 from conformance.probes.api import ProbeContext
-from tests.scenes.build import build_scene
-from tests.scenes.Chain import chain
+from scenes.build import build_scene
+from scenes.Chain import chain
 
 SCENES = ("SimpleDAE", "Robertson", "HelloWorldDAE", "Chain")
 RULES = ("DAE740", "DAE741", "DAE742", "DAE743", "DAE744", "DAE745", "DAE746")

@@ -40,10 +40,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     kinds = set(args.only or ("scenes", "defects", "fixtures"))
     args.out.mkdir(parents=True, exist_ok=True)
-    try:
-        from scenes.build import build_scene, scene_names
-    except ImportError:  # before the scene framework moved to the top level
-        from tests.scenes.build import build_scene, scene_names
+    from scenes.build import build_scene, scene_names
     from tests.fixturekit import all_cases, materialise
     from tests.probes import defects_basic, defects_derivatives, defects_simulation
     from tests.probes.variants import build as build_variant

@@ -24,7 +24,7 @@ from conformance.probes.session import (
     configure,
     start_instance,
 )
-from tests.scenes.Chain import chain
+from scenes.Chain import chain
 
 N = 2000
 X, DER, U, Y = 2, 3, 4, 5

@@ -17,9 +17,9 @@ from conformance.probes.api import Point
 from conformance.probes.registry import PROBES
 from conformance.probes.sampling import near_points, start_point
 from conformance.probes.session import CallRecord, Layout
-from tests.demo_legacy import FORMULATION_MANIFEST
+from scenes.build import build_scene
+from scenes.demo_legacy import FORMULATION_MANIFEST
 from tests.probes.variants import variant
-from tests.scenes.build import build_scene
 
 CATALOGUE = default_catalogue()
 PROBE_CODES = {r.code for r in CATALOGUE if r.stage == "probe"}

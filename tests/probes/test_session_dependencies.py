@@ -27,8 +27,8 @@ from conformance.probes.session import (
     configure,
     start_instance,
 )
-from tests.scenes.build import build_scene
-from tests.scenes.Chain import chain
+from scenes.build import build_scene
+from scenes.Chain import chain
 
 
 class Opened:

@@ -16,7 +16,7 @@ from typing import Sequence
 
 from conformance.manifest import MANIFEST
 from conformance.model import MODEL_DESCRIPTION
-from tests.scenes.build import build_scene
+from scenes.build import build_scene
 
 CACHE = Path(__file__).resolve().parents[2] / ".cache" / "variants"
 

@@ -26,7 +26,7 @@ import pytest
 from conformance.catalogue import default_catalogue
 from conformance.engine import EngineOptions, check_fmu
 from conformance.findings import thaw
-from tests.scenes.build import SCENES_DIR, build_scene
+from scenes.build import SCENES_DIR, build_scene
 from tests.scenes.test_scenes import SCENES, Instance
 
 FMI_OK, FMI_DISCARD, FMI_ERROR = 0, 2, 3

@@ -11,7 +11,7 @@ from conformance.engine import EngineOptions, check_fmu
 from conformance.findings import thaw
 from conformance.simulate.run import simulate_fmu
 from conformance.simulate.settings import Settings
-from tests.scenes.build import build_scene
+from scenes.build import build_scene
 from tests.simulate.systems import ROBERTSON_REFERENCE, VAN_DER_POL_IMPASSE
 
 

@@ -17,7 +17,7 @@ from conformance.simulate.dae import integrate_dae
 from conformance.simulate.settings import Settings
 from conformance.simulate.system import FINITE_DIFFERENCES, FmuDae, FmuOde, pattern_from
 from conformance.xmlsafe import parse_xml
-from tests.scenes.build import build_scene
+from scenes.build import build_scene
 
 
 @pytest.fixture

@@ -55,7 +55,7 @@
 #include "dae_model.h"
 
 #ifndef FMU_INSTANTIATION_TOKEN
-#error "compile with -DFMU_INSTANTIATION_TOKEN=\"...\" (tests/scenes/build.py does)"
+#error "compile with -DFMU_INSTANTIATION_TOKEN=\"...\" (scenes/build.py does)"
 #endif
 
 #define NMAX      FMU_MAX_VARS            /* capacity of the model's tables only */

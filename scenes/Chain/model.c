@@ -14,7 +14,7 @@
  * values, both from one walk over the entries (jacobian() below), so the framework's
  * derivative calls, Newton steps and per-element dependencies are O(N).
  *
- * N = CHAIN_N (default 4). The XML in this folder is for N = 4; tests/scenes/Chain/chain.py
+ * N = CHAIN_N (default 4). The XML in this folder is for N = 4; scenes/Chain/chain.py
  * writes it for any N and builds with -DCHAIN_N=N -DFMU_MAX_VARS=<power of two >= N>
  * (the capacity of ModelDef's tables).
  * Value references: time 0, enable 1, x 2, der(x) 3, u 4, y 5, w[i] 10+2i, r[i] 11+2i.

@@ -19,7 +19,7 @@ from conformance.probes.sampling import near_points, start_point
 from conformance.probes.session import CallRecord, Layout
 from scenes.build import build_scene
 from scenes.demo_legacy import FORMULATION_MANIFEST
-from tests.probes.variants import variant
+from tests.fixtures.defects.variants import variant
 
 CATALOGUE = default_catalogue()
 PROBE_CODES = {r.code for r in CATALOGUE if r.stage == "probe"}

@@ -45,7 +45,15 @@ def _rewrite(src: Path, dest: Path, *, drop=lambda name: False, replace=None) ->
 
 
 def _catalogue(**options) -> Catalogue:
-    """The default catalogue with some options of the runner rules changed."""
+    """The default catalogue with some options of the runner rules changed.
+
+    A runner rule the catalogue does not name (renamed?) or an option no runner rule has (a
+    typo) fails here instead of leaving the limits at their defaults.
+    """
+    unknown = sorted(set(runner.RUNNER_RULES) - {rule.name for rule in CATALOGUE})
+    assert unknown == [], f"runner rules missing from the catalogue: {unknown}"
+    known = {k for rule in CATALOGUE if rule.name in runner.RUNNER_RULES for k, _ in rule.options}
+    assert set(options) <= known, f"no runner rule has the options {sorted(set(options) - known)}"
     rules = []
     for rule in CATALOGUE:
         if rule.name in runner.RUNNER_RULES:

@@ -18,12 +18,12 @@ venv: $(STAMP)
 
 # Build the example FMUs, check them, and write reports/demo/ (JSON and console output).
 demo: $(STAMP)
-	$(BIN)/python -m tests.scenes.build $(SCENES) --out $(DEMO)
-	$(BIN)/python -m tests.demo_legacy $(DEMO)
+	$(BIN)/python -m scenes.build $(SCENES) --out $(DEMO)
+	$(BIN)/python -m scenes.demo_legacy $(DEMO)
 	@# Two FMUs with faults, to show evidence: a wrong partial derivative, a singular dg/dw.
-	$(BIN)/python -m tests.scenes.build SimpleDAE -D DEFECT_WRONG_JACOBIAN --out build/demo-defect
+	$(BIN)/python -m scenes.build SimpleDAE -D DEFECT_WRONG_JACOBIAN --out build/demo-defect
 	mv build/demo-defect/SimpleDAE.fmu $(DEMO)/SimpleDAE-wrong-jacobian.fmu
-	$(BIN)/python -m tests.scenes.build VanDerPolDAE --out $(DEMO)
+	$(BIN)/python -m scenes.build VanDerPolDAE --out $(DEMO)
 	@mkdir -p reports/demo
 	@set -e; for fmu in $(DEMO)/*.fmu; do \
 	  name=$$(basename $$fmu .fmu); \

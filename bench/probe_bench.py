@@ -53,8 +53,8 @@ from conformance.probes.registry import PROBES
 from conformance.probes import jacobian as J
 from conformance.numerics import numdiff
 from conformance.probes.api import ProbeContext
-from tests.scenes.build import build_scene
-from tests.scenes.Chain import chain
+from scenes.build import build_scene
+from scenes.Chain import chain
 
 SCENES = ("SimpleDAE", "Robertson", "HelloWorldDAE", "Chain")
 RULES = ("DAE740", "DAE741", "DAE742", "DAE743", "DAE744", "DAE745", "DAE746")

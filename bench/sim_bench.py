@@ -50,7 +50,7 @@ import numpy as np
 
 from bench.inprocess import LoadedFmu
 from bench.static_bench import machine_info
-from tests.scenes.build import build_scene
+from scenes.build import build_scene
 
 SCENES = ("SimpleDAE", "Robertson", "Akzo")
 RTOLS = tuple(10.0 ** -k for k in range(3, 11))

@@ -40,20 +40,16 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     kinds = set(args.only or ("scenes", "defects", "fixtures"))
     args.out.mkdir(parents=True, exist_ok=True)
-    try:
-        from scenes.build import build_scene, scene_names
-    except ImportError:  # before the scene framework moved to the top level
-        from tests.scenes.build import build_scene, scene_names
+    from scenes.build import build_scene, scene_names
     from tests.fixturekit import all_cases, materialise
-    from tests.probes import defects_basic, defects_derivatives, defects_simulation
-    from tests.probes.variants import build as build_variant
+    from tests.fixtures.defects import DEFECTS
+    from tests.fixtures.defects.variants import build as build_variant
 
     if "scenes" in kinds:
         for scene in scene_names():
             _write(args.out, f"scene-{scene}", build_scene(scene), EngineOptions(probes=True))
     if "defects" in kinds:
-        for defect in (*defects_basic.DEFECTS, *defects_derivatives.DEFECTS,
-                       *defects_simulation.DEFECTS):
+        for defect in DEFECTS:
             _write(args.out, f"defect-{defect.id}", build_variant(defect),
                    EngineOptions(probes=True))
     if "fixtures" in kinds:

@@ -10,6 +10,7 @@ from pathlib import Path
 
 from conformance.manifest import MANIFEST
 from conformance.model import MODEL_DESCRIPTION
+from scenes.build import SCENES_DIR
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -18,7 +19,7 @@ else:  # pragma: no cover
 
 TESTS = Path(__file__).resolve().parent
 FIXTURES = TESTS / "fixtures"
-SCENES = TESTS / "scenes"
+SCENES = SCENES_DIR
 ALIASES = {"manifest": MANIFEST, "modelDescription": MODEL_DESCRIPTION}
 CONTROL = {"fixture.toml", "fixture.py"}
 

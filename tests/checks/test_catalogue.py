@@ -30,6 +30,11 @@ def test_rule_entry_is_complete(rule):
     assert rule.code in explain_text(rule)
 
 
+def test_fixture_exemptions_name_catalogue_rules():
+    unknown = sorted(set(NO_FIXTURE) - {r.name for r in RULES})
+    assert unknown == [], f"NO_FIXTURE names rules the catalogue does not have: {unknown}"
+
+
 @pytest.mark.parametrize("rule", [r for r in RULES if r.stage in ("archive", "xml", "schema",
                                                                    "static")],
                          ids=lambda r: r.code)

@@ -7,7 +7,7 @@ from __future__ import annotations
 import pytest
 
 from conformance.engine import EngineOptions, check_fmu
-from tests.scenes.build import build_scene
+from scenes.build import build_scene
 
 SEEDS = range(20)
 

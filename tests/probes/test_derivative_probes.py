@@ -7,7 +7,6 @@ are covered by tests/probes/test_defects.py and tests/probes/test_clean_scenes.p
 from __future__ import annotations
 
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Callable, Sequence
 
 import numpy as np
@@ -21,11 +20,12 @@ from conformance.model import read_model_description
 from conformance.probes import derivatives as D
 from conformance.probes import dgdw
 from conformance.probes.api import FmiError, Point, ProbeContext, ProbeSkipped
+from scenes.build import SCENES_DIR
 
 FAMILY = {**D.PROBES, **dgdw.PROBES}  # the derivative probes and the dg/dw probes
 OPTIONS = {r.code: r.option_values for r in default_catalogue()}  # the one place of defaults
 
-SCENES = Path(__file__).resolve().parents[1] / "scenes"
+SCENES = SCENES_DIR
 H = 1e-30  # complex step: exact first derivatives (Squire & Trapp 1998)
 
 
@@ -400,7 +400,7 @@ def test_probe_errors_are_published_for_mismatches():
 # ------------------------------------------------------------------- the Chain scene (real)
 
 def test_chain_xml_is_the_generators():
-    from tests.scenes.Chain import chain
+    from scenes.Chain import chain
 
     here = SCENES / "Chain"
     assert (here / "modelDescription.xml").read_text() == chain.model_description(4)
@@ -410,7 +410,7 @@ def test_chain_xml_is_the_generators():
 @pytest.mark.parametrize("seed", range(20))
 def test_chain_fmu_is_clean_with_probes(seed):
     from conformance.engine import EngineOptions, check_fmu
-    from tests.scenes.Chain.chain import build_chain
+    from scenes.Chain.chain import build_chain
 
     report = check_fmu(build_chain(), options=EngineOptions(probes=True, seed=seed))
     assert report.findings == (), [(f.code, f.subject, f.message) for f in report.findings]
@@ -419,7 +419,7 @@ def test_chain_fmu_is_clean_with_probes(seed):
 
 def test_larger_chain_fmu_is_clean_and_coloured_with_three_groups():
     from conformance.engine import EngineOptions, check_fmu
-    from tests.scenes.Chain.chain import build_chain
+    from scenes.Chain.chain import build_chain
 
     report = check_fmu(build_chain(40), options=EngineOptions(probes=True))
     assert report.findings == ()

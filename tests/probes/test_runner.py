@@ -18,9 +18,9 @@ from conformance.probes.registry import PROBES
 from conformance.probes.sampling import near_points, start_point
 from conformance.runtime.callrecord import CallRecord
 from conformance.runtime.layout import Layout
-from tests.demo_legacy import FORMULATION_MANIFEST
-from tests.probes.variants import variant
-from tests.scenes.build import build_scene
+from scenes.build import build_scene
+from scenes.demo_legacy import FORMULATION_MANIFEST
+from tests.fixtures.defects.variants import variant
 
 CATALOGUE = default_catalogue()
 PROBE_CODES = {r.code for r in CATALOGUE if r.stage == "probe"}
@@ -46,7 +46,15 @@ def _rewrite(src: Path, dest: Path, *, drop=lambda name: False, replace=None) ->
 
 
 def _catalogue(**options) -> Catalogue:
-    """The default catalogue with some options of the runner rules changed."""
+    """The default catalogue with some options of the runner rules changed.
+
+    A runner rule the catalogue does not name (renamed?) or an option no runner rule has (a
+    typo) fails here instead of leaving the limits at their defaults.
+    """
+    unknown = sorted(set(runner.RUNNER_RULES) - {rule.name for rule in CATALOGUE})
+    assert unknown == [], f"runner rules missing from the catalogue: {unknown}"
+    known = {k for rule in CATALOGUE if rule.name in runner.RUNNER_RULES for k, _ in rule.options}
+    assert set(options) <= known, f"no runner rule has the options {sorted(set(options) - known)}"
     rules = []
     for rule in CATALOGUE:
         if rule.name in runner.RUNNER_RULES:

@@ -23,8 +23,8 @@ from conformance.runtime.instance import Dependency, Instance
 from conformance.runtime.layout import Layout
 from conformance.runtime.library import Library
 from conformance.runtime.modes import configure, start_instance
-from tests.scenes.build import build_scene
-from tests.scenes.Chain import chain
+from scenes.build import build_scene
+from scenes.Chain import chain
 
 
 class Opened:

@@ -1,6 +1,6 @@
 """Behaviour of the test-scene FMUs, checked against independent Python models.
 
-Each scene is built with tests.scenes.build, extracted and driven through fmpy.
+Each scene is built with scenes.build, extracted and driven through fmpy.
 The reference equations below are written out again in numpy, so a wrong C
 model, a wrong Jacobian or a wrong ModelStructure shows up here first.
 """
@@ -24,8 +24,8 @@ from fmpy.fmi3 import FMU3Model
 from lxml import etree
 from scipy.optimize import fsolve
 
-from tests.scenes.build import (MANIFEST_ENTRY, REPO_ROOT, build_scene, platform_tuple,
-                                scene_names, scene_xml_dir, shared_library_extension)
+from scenes.build import (MANIFEST_ENTRY, REPO_ROOT, build_scene, platform_tuple, scene_names,
+                          scene_xml_dir, shared_library_extension)
 
 FMPY_DIR = Path(fmpy.__file__).resolve().parent
 FMI_ERROR = 3
@@ -134,7 +134,7 @@ def _akzo_f(x, w, u):
 
 
 def _fourbar(length_unit, force_unit):
-    """f and g of tests/scenes/FourBar/fourbar.h, written again in numpy (same operation
+    """f and g of scenes/FourBar/fourbar.h, written again in numpy (same operation
     order as the C code: the moment balances cancel terms of 1e3, so rounding shows)."""
     l1, l2, l3, fz, fy, pn, pt = 0.35, 0.30, 0.30, 1e4, -1e4, -0.1, 0.3
     mass1, mass3 = 4.0 * l1 * l1 / 3.0 + 20.0 * l1 * l1, 2.0 * l3 * l3 / 3.0 + 10.0 * l3 * l3
@@ -482,7 +482,7 @@ def test_cache_reuse_and_defines(tmp_path):
 
 def test_cache_env_var_and_concurrent_builds(tmp_path):
     env = dict(os.environ, LSDAE_SCENE_CACHE=str(tmp_path))
-    code = "from tests.scenes.build import build_scene; print(build_scene('Robertson'))"
+    code = "from scenes.build import build_scene; print(build_scene('Robertson'))"
     procs = [subprocess.Popen([sys.executable, "-c", code], cwd=REPO_ROOT, env=env,
                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
              for _ in range(2)]
@@ -498,7 +498,7 @@ def test_cache_env_var_and_concurrent_builds(tmp_path):
 
 
 def test_cli_copies_to_out(tmp_path):
-    proc = subprocess.run([sys.executable, "-m", "tests.scenes.build", "SimpleDAE", "Robertson",
+    proc = subprocess.run([sys.executable, "-m", "scenes.build", "SimpleDAE", "Robertson",
                            "--out", str(tmp_path)], cwd=REPO_ROOT, capture_output=True, text=True)
     assert proc.returncode == 0, proc.stderr
     assert sorted(p.name for p in tmp_path.iterdir()) == ["Robertson.fmu", "SimpleDAE.fmu"]

@@ -11,7 +11,7 @@ import csv
 import pytest
 
 from conformance.simulate_command import add_parser, run
-from tests.scenes.build import build_scene
+from scenes.build import build_scene
 from tests.numerics.systems import VAN_DER_POL_IMPASSE
 
 

@@ -10,9 +10,9 @@ import pytest
 from conformance.engine import EngineOptions, check_fmu
 from conformance.findings import thaw
 from conformance.simulate_command import simulate_fmu
-from tests.simkit import sim_settings
-from tests.scenes.build import build_scene
+from scenes.build import build_scene
 from tests.numerics.systems import ROBERTSON_REFERENCE, VAN_DER_POL_IMPASSE
+from tests.simkit import sim_settings
 
 
 def _codes(result) -> set[str]:

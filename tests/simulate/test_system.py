@@ -11,15 +11,15 @@ import pytest
 
 from conformance.manifest import MANIFEST, read_manifest
 from conformance.model import MODEL_DESCRIPTION, Unknown, read_model_description
-from conformance.runtime.layout import Layout
+from conformance.numerics.dae import integrate_dae
 from conformance.runtime.callrecord import CallRecord
+from conformance.runtime.layout import Layout
 from conformance.runtime.library import Library
 from conformance.runtime.modes import start_instance
-from conformance.numerics.dae import integrate_dae
 from conformance.simulate.system import FINITE_DIFFERENCES, FmuDae, FmuOde, pattern_from
 from conformance.xmlsafe import parse_xml
+from scenes.build import build_scene
 from tests.simkit import sim_settings
-from tests.scenes.build import build_scene
 
 
 @pytest.fixture

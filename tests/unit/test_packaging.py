@@ -1,4 +1,4 @@
-"""The wheel ships every subpackage, the rule catalogue and our XSDs."""
+"""The wheel ships every subpackage, the rule catalogue and our XSDs, and nothing else."""
 from __future__ import annotations
 
 import sys
@@ -22,3 +22,12 @@ def test_every_subpackage_is_listed_for_the_wheel():
                                      "conformance._schemas": "schemas"}
     data = config["package-data"]
     assert "*.toml" in data["conformance._rules"] and "*.xsd" in data["conformance._schemas"]
+
+
+def test_development_packages_are_not_shipped():
+    """scenes/ (the C test FMUs and their builder), tests/, bench/ and scripts/ stay out."""
+    config = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]
+    assert "find" not in config.get("packages", {}), "an explicit list keeps scenes/ out"
+    outside = [p for p in config["packages"] if p.split(".")[0] != "conformance"]
+    assert outside == [], "only conformance.* belongs in the wheel"
+    assert (ROOT / "scenes" / "build.py").is_file()

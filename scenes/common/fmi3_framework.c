@@ -24,7 +24,8 @@
  *
  * Illegal calls return fmi3Error and leave the instance unchanged.
  *
- * Defect variants for the probe tests (tests/probes/defects_basic.py), each
+ * Defect variants for the probe tests (tests/fixtures/defects/basic.py and derivatives.py;
+ * tests/fixtures/README.md lists every switch of every scene), each
  * compiled in only with its -DDEFECT_... macro:
  *   DEFECT_SEGFAULT_GETFLOAT64     fmi3GetFloat64 of a residual crashes (Continuous-Time Mode)
  *   DEFECT_HANG_DIRECTIONAL        fmi3GetDirectionalDerivative never returns
@@ -41,7 +42,7 @@
  *   DEFECT_FATAL_DIRECTIONAL       fmi3GetDirectionalDerivative returns fmi3Fatal
  *   DEFECT_WRONG_ADJOINT           the adjoint alone doubles d(res[0])/d(w[0]) (DAE mode)
  *   DEFECT_ODE_DAE_INCONSISTENT    ODE mode solves g = 0.05 instead of g = 0
- * and for the simulation probes (tests/probes/defects_simulation.py), only for t > 0.5:
+ * and for the simulation probes (tests/fixtures/defects/simulation.py), only for t > 0.5:
  *   DEFECT_LATE_JUMP               res[0] jumps by 1 (no event indicator)
  *   DEFECT_LATE_FAST               der[0] gains 1e5 cos(1e5 t)
  *   DEFECT_LATE_ODE_DRIFT          ODE mode solves g = 0.05 instead of g = 0
@@ -55,7 +56,7 @@
 #include "dae_model.h"
 
 #ifndef FMU_INSTANTIATION_TOKEN
-#error "compile with -DFMU_INSTANTIATION_TOKEN=\"...\" (tests/scenes/build.py does)"
+#error "compile with -DFMU_INSTANTIATION_TOKEN=\"...\" (scenes/build.py does)"
 #endif
 
 #define NMAX      FMU_MAX_VARS            /* capacity of the model's tables only */

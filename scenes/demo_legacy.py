@@ -1,7 +1,7 @@
 """Write a legacy-shaped copy of HelloWorldDAE for `make demo`, to show draft detection and the
 migration hints: the same binary, with the manifest in the Formulation shape (draft-shapes B).
 
-Usage: python -m tests.demo_legacy DEMO_DIR   (DEMO_DIR holds HelloWorldDAE.fmu)
+Usage: python -m scenes.demo_legacy DEMO_DIR   (DEMO_DIR holds HelloWorldDAE.fmu)
 """
 from __future__ import annotations
 

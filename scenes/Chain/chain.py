@@ -1,6 +1,6 @@
 """The Chain scene at any size: its XML for N algebraic variables, and the FMU built for N.
 
-``tests/scenes/Chain/{modelDescription,fmi-ls-manifest}.xml`` are ``model_description(4)`` and
+``scenes/Chain/{modelDescription,fmi-ls-manifest}.xml`` are ``model_description(4)`` and
 ``manifest(4)`` (a test checks it); :func:`build_chain` compiles model.c with ``-DCHAIN_N=N``
 and ``FMU_MAX_VARS`` (the capacity of the model's value-reference tables) raised to the next
 power of two, then swaps the XML for N's in the archive. See model.c for the equations. The
@@ -8,7 +8,7 @@ model declares its Jacobian's pattern, so the framework's work arrays are O(N) h
 a derivative call costs O(N); the binary also implements fmi3GetVariableDependencies
 (``providesPerElementDependencies="true"``).
 
-    python -m tests.scenes.Chain.chain 4 --write    # rewrite the committed XML
+    python -m scenes.Chain.chain 4 --write    # rewrite the committed XML
 """
 from __future__ import annotations
 
@@ -19,10 +19,10 @@ import zipfile
 from pathlib import Path
 from typing import Sequence
 
-from tests.scenes.build import MANIFEST_ENTRY, build_scene
+from scenes.build import MANIFEST_ENTRY, REPO_ROOT, build_scene
 
 HERE = Path(__file__).resolve().parent
-CACHE = HERE.parents[2] / ".cache" / "chain"
+CACHE = REPO_ROOT / ".cache" / "chain"
 DEFAULT_N = 4
 MAX_N = 16384
 

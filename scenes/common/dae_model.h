@@ -1,6 +1,6 @@
 /*
  * dae_model.h - the interface between the lsdae test-scene framework
- * (fmi3_framework.c) and one model file (tests/scenes/<Name>/model.c).
+ * (fmi3_framework.c) and one model file (scenes/<Name>/model.c).
  *
  * A model is a semi-explicit index-1 DAE
  *

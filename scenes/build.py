@@ -1,8 +1,8 @@
-"""Build the lsdae test-scene FMUs from tests/scenes/<Name>/.
+"""Build the lsdae test-scene FMUs from scenes/<Name>/.
 
 Each scene folder holds ``model.c`` (plus optional model-specific ``*.c``/``*.h``),
 ``modelDescription.xml`` and ``fmi-ls-manifest.xml``.  The C framework in
-``tests/scenes/common/`` is compiled together with the model into
+``scenes/common/`` is compiled together with the model into
 ``binaries/<platform-tuple>/<modelIdentifier>.<ext>`` and zipped with the two XML
 files into ``<Name>.fmu``.
 
@@ -14,7 +14,7 @@ publish with an atomic rename, so concurrent builds (two pytest processes) are s
 
 Command line::
 
-    python -m tests.scenes.build SimpleDAE Robertson --out DIR [-D DEFECT_X ...]
+    python -m scenes.build SimpleDAE Robertson --out DIR [-D DEFECT_X ...]
 """
 
 from __future__ import annotations
@@ -35,7 +35,7 @@ from pathlib import Path
 from typing import Sequence
 
 SCENES_DIR = Path(__file__).resolve().parent
-REPO_ROOT = SCENES_DIR.parent.parent
+REPO_ROOT = SCENES_DIR.parent
 COMMON_DIR = SCENES_DIR / "common"
 DEFAULT_CACHE_DIR = REPO_ROOT / ".cache" / "scenes"
 CACHE_ENV_VAR = "LSDAE_SCENE_CACHE"
@@ -211,7 +211,7 @@ def build_scene(name: str, *, defines: Sequence[str] = (), cache_dir: Path | Non
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m tests.scenes.build",
+    parser = argparse.ArgumentParser(prog="python -m scenes.build",
                                      description="Build the lsdae test-scene FMUs.")
     parser.add_argument("scenes", nargs="*", help=f"scene names (default: all of {scene_names()})")
     parser.add_argument("--out", type=Path, help="copy the built FMUs into this folder")

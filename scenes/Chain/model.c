@@ -14,12 +14,12 @@
  * values, both from one walk over the entries (jacobian() below), so the framework's
  * derivative calls, Newton steps and per-element dependencies are O(N).
  *
- * N = CHAIN_N (default 4). The XML in this folder is for N = 4; tests/scenes/Chain/chain.py
+ * N = CHAIN_N (default 4). The XML in this folder is for N = 4; scenes/Chain/chain.py
  * writes it for any N and builds with -DCHAIN_N=N -DFMU_MAX_VARS=<power of two >= N>
  * (the capacity of ModelDef's tables).
  * Value references: time 0, enable 1, x 2, der(x) 3, u 4, y 5, w[i] 10+2i, r[i] 11+2i.
  *
- * Defects (their manifest edits are in tests/probes/defects_derivatives.py):
+ * Defects (their manifest edits are in tests/fixtures/defects/derivatives.py):
  *   DEFECT_SINGULAR_GW       the last residual is twice the one before it: dg/dw is singular
  *   DEFECT_ILL_CONDITIONED   the last residual is the one before it plus 1e-10 * w[N-1]
  * Both drop x and u from the residuals, so that w = 0 solves them at every point and the

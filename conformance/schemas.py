@@ -38,7 +38,16 @@ from typing import Iterator, Union
 
 from lxml import etree
 
-from . import drafts
+from .drafts.detect import (
+    ALPHA1,
+    ATTRIBUTES_ONLY,
+    DRAFT_LABELS,
+    FLAT_INDEX,
+    FORMULATION,
+    LEGACY_DRAFTS,
+    LS_DAE_ROOT,
+    LS_NAMESPACE,
+)
 from .findings import Location, Violation, evidence
 from .paths import schemas_dir
 
@@ -50,25 +59,25 @@ MODEL_DESCRIPTION_XSD = "fmi3ModelDescription.xsd"
 
 #: Our schema file for each draft id (in the ``schemas/`` folder).
 SCHEMA_FILES: dict[str, str] = {
-    drafts.ALPHA1: "fmi-ls-dae-alpha1.xsd",
-    drafts.FORMULATION: "fmi-ls-dae-formulation.xsd",
-    drafts.LS_DAE_ROOT: "fmi-ls-dae-ls-dae-root.xsd",
-    drafts.FLAT_INDEX: "fmi-ls-dae-flat-index.xsd",
-    drafts.ATTRIBUTES_ONLY: "fmi-ls-dae-attributes-only.xsd",
+    ALPHA1: "fmi-ls-dae-alpha1.xsd",
+    FORMULATION: "fmi-ls-dae-formulation.xsd",
+    LS_DAE_ROOT: "fmi-ls-dae-ls-dae-root.xsd",
+    FLAT_INDEX: "fmi-ls-dae-flat-index.xsd",
+    ATTRIBUTES_ONLY: "fmi-ls-dae-attributes-only.xsd",
 }
 
 #: The local name of the root each draft's schema accepts (legacy roots may also be in the ls namespace).
 EXPECTED_ROOTS: dict[str, str] = {
-    drafts.ALPHA1: "fmiDAEManifest",
-    drafts.FORMULATION: "fmiLayeredStandardManifest",
-    drafts.LS_DAE_ROOT: "fmi-ls-dae",
-    drafts.FLAT_INDEX: "fmiLayeredStandardManifest",
-    drafts.ATTRIBUTES_ONLY: "fmi-dae",
+    ALPHA1: "fmiDAEManifest",
+    FORMULATION: "fmiLayeredStandardManifest",
+    LS_DAE_ROOT: "fmi-ls-dae",
+    FLAT_INDEX: "fmiLayeredStandardManifest",
+    ATTRIBUTES_ONLY: "fmi-dae",
 }
 
 _CORE_PREFIX = "fmi-core/"
 _XSI_NAMESPACE = "http://www.w3.org/2001/XMLSchema-instance"
-_PREFIXES = {drafts.LS_NAMESPACE: "fmi-ls", _XSI_NAMESPACE: "xsi"}
+_PREFIXES = {LS_NAMESPACE: "fmi-ls", _XSI_NAMESPACE: "xsi"}
 _REMOTE = re.compile(r"^[a-zA-Z][a-zA-Z0-9+.-]*://")
 
 XmlInput = Union["etree._ElementTree", "etree._Element"]
@@ -85,7 +94,7 @@ class SchemaLoadError(RuntimeError):
 def schema_dir() -> Path:
     """The folder holding our per-draft XSDs (``schemas/``, or ``conformance/_schemas`` in a wheel)."""
     folder = schemas_dir()
-    if not (folder / SCHEMA_FILES[drafts.ALPHA1]).is_file():
+    if not (folder / SCHEMA_FILES[ALPHA1]).is_file():
         raise SchemaLoadError(f"the lsdae schemas are missing from {folder}")
     return folder
 
@@ -152,7 +161,7 @@ def model_description_schema() -> etree.XMLSchema:
 
 @functools.lru_cache(maxsize=None)
 def manifest_schema(draft: str) -> etree.XMLSchema:
-    """Our XSD for ``draft`` (one of :data:`conformance.drafts.ALL_DRAFTS`), loaded once per process."""
+    """Our XSD for a draft id of :mod:`conformance.drafts.detect`, loaded once per process."""
     try:
         name = SCHEMA_FILES[draft]
     except KeyError:
@@ -204,8 +213,8 @@ def validate_manifest(tree: XmlInput, draft: str, *, file: str) -> Iterator[Viol
     schema_name = SCHEMA_FILES[draft]
     expected = EXPECTED_ROOTS[draft]
     qname = etree.QName(root)
-    legacy = draft in drafts.LEGACY_DRAFTS
-    accepted_ns = (None, drafts.LS_NAMESPACE) if legacy else (None,)
+    legacy = draft in LEGACY_DRAFTS
+    accepted_ns = (None, LS_NAMESPACE) if legacy else (None,)
     if qname.localname != expected or qname.namespace not in accepted_ns:
         yield _wrong_root(root, draft, expected, file=file, schema_name=schema_name)
         return
@@ -251,7 +260,7 @@ def _run(
 def _wrong_root(root: etree._Element, draft: str, expected: str, *, file: str, schema_name: str) -> Violation:
     written = _written_name(root)
     namespace = etree.QName(root).namespace
-    if draft == drafts.ALPHA1 and etree.QName(root).localname == expected:
+    if draft == ALPHA1 and etree.QName(root).localname == expected:
         message = (
             f"the root <{written}> is in the namespace {namespace}; the fmi-ls-dae 1.0.0-alpha.1 root "
             "<fmiDAEManifest> and its children are in no namespace (only the three fmi-ls: "
@@ -259,7 +268,7 @@ def _wrong_root(root: etree._Element, draft: str, expected: str, *, file: str, s
         )
     else:
         message = (
-            f"the root element is <{written}>, but the {drafts.DRAFT_LABELS[draft]} "
+            f"the root element is <{written}>, but the {DRAFT_LABELS[draft]} "
             f"has the root <{expected}>"
         )
     return Violation(
@@ -293,7 +302,7 @@ def _elements(root: etree._Element) -> Iterator[etree._Element]:
 
 
 def _has_ls_elements(root: etree._Element) -> bool:
-    return any(etree.QName(e).namespace == drafts.LS_NAMESPACE for e in _elements(root))
+    return any(etree.QName(e).namespace == LS_NAMESPACE for e in _elements(root))
 
 
 def _unqualified_copy(root: etree._Element) -> tuple[etree._Element, list[etree._Element]]:
@@ -305,7 +314,7 @@ def _unqualified_copy(root: etree._Element) -> tuple[etree._Element, list[etree.
     duplicate = copy.deepcopy(root)
     for element in _elements(duplicate):
         qname = etree.QName(element)
-        if qname.namespace == drafts.LS_NAMESPACE:
+        if qname.namespace == LS_NAMESPACE:
             element.tag = qname.localname
     etree.cleanup_namespaces(duplicate)
     return duplicate, list(root.iter())

@@ -9,7 +9,7 @@ import re
 from typing import Iterator
 
 from ..context import CheckContext
-from ..drafts import ALPHA1
+from ..drafts.detect import ALPHA1
 from ..findings import Location, Violation, evidence
 from ..manifest import MANIFEST, Manifest
 

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 from typing import Iterator
 
 from ..context import Check, CheckContext
-from ..drafts import FORMULATION, LS_DAE_ROOT
+from ..drafts.detect import FORMULATION, LS_DAE_ROOT
 from ..findings import Location, Violation, evidence
 from ..manifest import Manifest
 from ..model import ModelDescription, Unknown, Variable

@@ -12,15 +12,16 @@ from . import (
     enable,
     header,
     index1,
+    manifest_dependencies,
+    manifest_lists,
     model_structure,
     model_variables,
     residual,
-    structure,
 )
 
 REGISTRY: dict[str, Check] = {}
-for _module in (header, enable, algebraic, residual, structure, model_variables, model_structure,
-                index1):
+for _module in (header, enable, algebraic, residual, manifest_dependencies, manifest_lists,
+                model_variables, model_structure, index1):
     for _code, _check in _module.CHECKS.items():
         if _code in REGISTRY:  # pragma: no cover - a defect caught by the tests
             raise RuntimeError(f"rule {_code} registered twice")

@@ -20,10 +20,9 @@ only; :func:`validate_manifest` validates a copy in which elements of that names
 no namespace (attributes untouched), so one schema covers every namespace variant of a draft.
 The 1.0.0-alpha.1 manifest is validated as it is: its elements must be in no namespace.
 
-Messages are libxml2's, tidied: Clark names ``{uri}local`` become ``fmi-ls:local``, enumeration
-sets are spelled out without braces, and the ``Expected is ( .. )`` phrasing is made readable.
-A follow-up error on an attribute that already has an error (libxml2 reports a bad list value
-twice, once for the item and once for the list) is dropped.
+Messages are libxml2's, tidied by :mod:`conformance.schema_messages`. A follow-up error on an
+attribute that already has an error (libxml2 reports a bad list value twice, once for the item
+and once for the list) is dropped.
 """
 from __future__ import annotations
 
@@ -50,6 +49,7 @@ from .drafts.detect import (
 )
 from .findings import Location, Violation, evidence
 from .paths import schemas_dir
+from .schema_messages import attribute_of, clean_message
 
 log = logging.getLogger(__name__)
 
@@ -76,8 +76,6 @@ EXPECTED_ROOTS: dict[str, str] = {
 }
 
 _CORE_PREFIX = "fmi-core/"
-_XSI_NAMESPACE = "http://www.w3.org/2001/XMLSchema-instance"
-_PREFIXES = {LS_NAMESPACE: "fmi-ls", _XSI_NAMESPACE: "xsi"}
 _REMOTE = re.compile(r"^[a-zA-Z][a-zA-Z0-9+.-]*://")
 
 XmlInput = Union["etree._ElementTree", "etree._Element"]
@@ -239,7 +237,7 @@ def _run(
     seen: set[tuple[str, str]] = set()
     for entry in entries:
         path = entry.path or None
-        attribute = _attribute_of(entry.message)
+        attribute = attribute_of(entry.message)
         if attribute is not None:
             key = (path or "", attribute)
             if key in seen:
@@ -329,44 +327,3 @@ def _original_line(copy_root: XmlInput, path: str, originals: list[etree._Elemen
         return None
     index = list(_root_of(copy_root).iter()).index(found[0])
     return originals[index].sourceline if index < len(originals) else None
-
-
-_ATTRIBUTE_RE = re.compile(r"^Element '[^']*', attribute '([^']*)':")
-_CLARK_RE = re.compile(r"\{([^{}'\s]+)\}([A-Za-z_][\w.-]*)")
-_SET_RE = re.compile(r"The value ('[^']*') is not an element of the set \{(.*)\}\.?")
-_FACET_RE = re.compile(r"\[facet '[^']*'\] ")
-_EXPECTED_ONE_RE = re.compile(r"(?<=expected )is one of \( (.*?) \)\.?")
-_EXPECTED_RE = re.compile(r"(?<=expected )is \( (.*?) \)\.?")
-_REDUNDANT_ATTRIBUTE_RE = re.compile(r"Element ('[^']*'), attribute ('[^']*'): The attribute '[^']*' is not allowed\.?")
-_MISSING_ATTRIBUTE_RE = re.compile(r"The attribute ('[^']*') is required but missing\.?")
-
-
-def _attribute_of(message: str) -> str | None:
-    match = _ATTRIBUTE_RE.match(message)
-    return match.group(1) if match else None
-
-
-def clean_message(message: str) -> str:
-    """Tidy a libxml2 schema message: prefixes for namespaces, readable sets and expectations."""
-    text = message.strip()
-    text = _CLARK_RE.sub(_prefixed, text)
-    text = _FACET_RE.sub("", text)
-    text = _SET_RE.sub(lambda m: f"the value {m.group(1)} is not one of {m.group(2)}", text)
-    text = _REDUNDANT_ATTRIBUTE_RE.sub(r"Element \1: attribute \2 is not allowed", text)
-    text = _MISSING_ATTRIBUTE_RE.sub(r"the required attribute \1 is missing", text)
-    text = text.replace("This element is not expected. Expected", "this element is not expected here; expected")
-    text = text.replace("This element is not expected.", "this element is not expected here.")
-    text = text.replace("Missing child element(s). Expected", "missing child element; expected")
-    text = text.replace("Element content is not allowed, because the content type is empty",
-                        "no child elements are allowed here")
-    text = text.replace("No matching global declaration available for the validation root.",
-                        "this root element is not declared by the schema.")
-    text = _EXPECTED_ONE_RE.sub(lambda m: f"one of {m.group(1)}", text)
-    text = _EXPECTED_RE.sub(lambda m: m.group(1), text)
-    return text.rstrip(". ").rstrip()
-
-
-def _prefixed(match: re.Match[str]) -> str:
-    namespace, local = match.group(1), match.group(2)
-    prefix = _PREFIXES.get(namespace)
-    return f"{prefix}:{local}" if prefix else f"[{namespace}]{local}"

@@ -11,6 +11,7 @@ from lxml import etree
 from conformance import schemas
 from conformance.drafts import detect, migrate
 from conformance.findings import Violation
+from conformance.schema_messages import clean_message
 
 DATA = Path(__file__).parent / "data" / "manifests"
 SHAPES = sorted(p.name for p in DATA.glob("*.xml") if p.name != "unknown-root.xml")
@@ -300,9 +301,9 @@ def test_clean_message() -> None:
         "Element 'Float64', attribute 'causality': [facet 'enumeration'] The value 'x' is not an "
         "element of the set {'input', 'output'}."
     )
-    cleaned = schemas.clean_message(message)
+    cleaned = clean_message(message)
     assert "{" not in cleaned and "[facet" not in cleaned and "'input', 'output'" in cleaned
-    cleaned = schemas.clean_message(
+    cleaned = clean_message(
         "Element '{http://fmi-standard.org/fmi-ls-manifest}X': This element is not expected. "
         "Expected is one of ( A, B )."
     )

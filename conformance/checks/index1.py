@@ -145,9 +145,8 @@ def _greedy_matching_size(row_deps: Sequence[list[int] | None], n_cols: int) -> 
     return size + min(full, n_cols - size)
 
 
-def index1_structurally_singular(ctx: CheckContext, *, max_names: int = 5,
-                                 max_evidence: int = 100, max_edges: int = 5_000_000
-                                 ) -> Iterator[Violation]:
+def index1_structurally_singular(ctx: CheckContext, *, max_names: int, max_evidence: int,
+                                 max_edges: int) -> Iterator[Violation]:
     """The residual/algebraic-variable graph has a matching of size min(#residuals, #algebraic)."""
     model, manifest = ctx.model, ctx.manifest
     assert model is not None and manifest is not None

@@ -28,24 +28,29 @@ _DRIVE = re.compile(r"^[A-Za-z]:")
 
 @dataclass(frozen=True, slots=True)
 class ArchiveLimits:
-    """Bounds on what reading an FMU may cost; the catalogue options of ``archive-too-large``."""
+    """Bounds on what reading an FMU may cost; the catalogue options of ``archive-too-large``.
 
-    max_total_uncompressed: int = 2 * GiB
-    max_member: int = 512 * MiB
-    max_ratio: float = 1000.0
-    ratio_min_size: int = 1 * MiB  # the ratio limit applies only to members larger than this
-    max_members: int = 100_000
+    No defaults here: the catalogue is the one place they are written
+    (:func:`conformance.fmu.default_limits` reads them).
+    """
+
+    max_total_uncompressed: int
+    max_member: int
+    max_ratio: float
+    ratio_min_size: int  # the ratio limit applies only to members larger than this
+    max_members: int
 
     @classmethod
     def from_options(cls, options: Mapping[str, Any]) -> ArchiveLimits:
-        """Build limits from catalogue options, ignoring keys that are not limits."""
+        """Build limits from catalogue options: every limit must be given, other keys are ignored."""
         values: dict[str, Any] = {}
         for f in fields(cls):
-            if f.name in options:
-                value = float(options[f.name]) if f.name == "max_ratio" else int(options[f.name])
-                if value <= 0:
-                    raise ValueError(f"archive limit {f.name} must be positive, got {value}")
-                values[f.name] = value
+            if f.name not in options:
+                raise ValueError(f"archive limit {f.name} is missing from the options")
+            value = float(options[f.name]) if f.name == "max_ratio" else int(options[f.name])
+            if value <= 0:
+                raise ValueError(f"archive limit {f.name} must be positive, got {value}")
+            values[f.name] = value
         return cls(**values)
 
 

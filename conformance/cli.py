@@ -22,7 +22,7 @@ from .baseline import load as load_baseline
 from .baseline import write as write_baseline
 from .catalogue import Catalogue, CatalogueError, RuleSpec, default_catalogue
 from .config import FAIL_ON, ConfigError, load_config
-from .drafts import ALL_DRAFTS, DRAFT_LABELS
+from .drafts.detect import ALL_DRAFTS, DRAFT_LABELS
 from .engine import EngineOptions
 from .findings import Report, RunInfo, Severity
 from .parallel import check_all

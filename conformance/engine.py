@@ -19,7 +19,8 @@ from . import __version__
 from .catalogue import Catalogue, RuleSpec, default_catalogue
 from .checks import REGISTRY
 from .context import CheckContext
-from .drafts import UNKNOWN, detect_draft, legacy_violations, unrecognised_violations
+from .drafts.detect import UNKNOWN, detect_draft, unrecognised_violations
+from .drafts.migrate import legacy_violations
 from .findings import Finding, FmuReport, Location, Report, Severity, Violation, evidence
 from .fmu import ArchiveLimits, ArchiveReadError, open_fmu
 from .manifest import MANIFEST, Manifest, read_manifest

@@ -40,6 +40,7 @@ from conformance.archive_base import (
     show_name,
 )
 from conformance.archive_scan import scan
+from conformance.catalogue import default_catalogue
 from conformance.findings import Location, Violation, evidence
 
 __all__ = [
@@ -56,6 +57,7 @@ __all__ = [
     "FmuSource",
     "GiB",
     "MiB",
+    "default_limits",
     "find_manifest_candidates",
     "open_fmu",
 ]
@@ -70,7 +72,6 @@ _CHUNK = MiB
 _O_NOFOLLOW = getattr(os, "O_NOFOLLOW", 0)
 _O_NONBLOCK = getattr(os, "O_NONBLOCK", 0)
 _O_BINARY = getattr(os, "O_BINARY", 0)
-_DEFAULT_LIMITS = ArchiveLimits()
 
 
 class ArchiveReadError(Exception):
@@ -230,13 +231,21 @@ class FmuSource:
         return _open_regular_file(member.ref, self._root)
 
 
-def open_fmu(path: Path, *, limits: ArchiveLimits = _DEFAULT_LIMITS
+def default_limits() -> ArchiveLimits:
+    """The limits the catalogue's ``archive-too-large`` options give by default."""
+    return ArchiveLimits.from_options(default_catalogue()[TOO_LARGE].option_values)
+
+
+def open_fmu(path: Path, *, limits: ArchiveLimits | None = None
              ) -> tuple[FmuSource | None, list[Violation]]:
     """Open an FMU (a ZIP archive, whatever its extension, or an unpacked folder).
 
-    Returns the source, or None when nothing in it can be used, and the violations found while
-    listing it. Never raises for anything the FMU contains.
+    ``limits`` default to the catalogue's (:func:`default_limits`). Returns the source, or None
+    when nothing in it can be used, and the violations found while listing it. Never raises for
+    anything the FMU contains.
     """
+    if limits is None:
+        limits = default_limits()
     try:
         return _open(Path(path), limits)
     except Exception as exc:  # a last resort: the FMU must never crash the checker

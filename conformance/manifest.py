@@ -1,6 +1,6 @@
 """The fmi-ls-dae manifest as a frozen dataclass, read from any draft shape.
 
-Every shape in the wild (see conformance/drafts.py) is normalised into one :class:`Manifest`:
+Every shape in the wild (see conformance/drafts/) is normalised into one :class:`Manifest`:
 element names are compared by local name, so namespaced legacy manifests read the same as
 alpha.1 ones; a legacy ``<Residual><Formulation .../></Residual>`` becomes a Residual
 :class:`~conformance.model.Unknown` whose ``formulations`` counts the Formulation children.
@@ -14,7 +14,7 @@ from typing import NamedTuple
 
 from lxml import etree
 
-from .drafts import LS_NAMESPACE
+from .drafts.detect import LS_NAMESPACE
 from .model import Unknown, parse_uint, parse_unknown
 
 MANIFEST = "extra/org.fmi-standard.fmi-ls-dae/fmi-ls-manifest.xml"

@@ -20,10 +20,9 @@ only; :func:`validate_manifest` validates a copy in which elements of that names
 no namespace (attributes untouched), so one schema covers every namespace variant of a draft.
 The 1.0.0-alpha.1 manifest is validated as it is: its elements must be in no namespace.
 
-Messages are libxml2's, tidied: Clark names ``{uri}local`` become ``fmi-ls:local``, enumeration
-sets are spelled out without braces, and the ``Expected is ( .. )`` phrasing is made readable.
-A follow-up error on an attribute that already has an error (libxml2 reports a bad list value
-twice, once for the item and once for the list) is dropped.
+Messages are libxml2's, tidied by :mod:`conformance.schema_messages`. A follow-up error on an
+attribute that already has an error (libxml2 reports a bad list value twice, once for the item
+and once for the list) is dropped.
 """
 from __future__ import annotations
 
@@ -38,9 +37,19 @@ from typing import Iterator, Union
 
 from lxml import etree
 
-from . import drafts
+from .drafts.detect import (
+    ALPHA1,
+    ATTRIBUTES_ONLY,
+    DRAFT_LABELS,
+    FLAT_INDEX,
+    FORMULATION,
+    LEGACY_DRAFTS,
+    LS_DAE_ROOT,
+    LS_NAMESPACE,
+)
 from .findings import Location, Violation, evidence
 from .paths import schemas_dir
+from .schema_messages import attribute_of, clean_message
 
 log = logging.getLogger(__name__)
 
@@ -50,25 +59,23 @@ MODEL_DESCRIPTION_XSD = "fmi3ModelDescription.xsd"
 
 #: Our schema file for each draft id (in the ``schemas/`` folder).
 SCHEMA_FILES: dict[str, str] = {
-    drafts.ALPHA1: "fmi-ls-dae-alpha1.xsd",
-    drafts.FORMULATION: "fmi-ls-dae-formulation.xsd",
-    drafts.LS_DAE_ROOT: "fmi-ls-dae-ls-dae-root.xsd",
-    drafts.FLAT_INDEX: "fmi-ls-dae-flat-index.xsd",
-    drafts.ATTRIBUTES_ONLY: "fmi-ls-dae-attributes-only.xsd",
+    ALPHA1: "fmi-ls-dae-alpha1.xsd",
+    FORMULATION: "fmi-ls-dae-formulation.xsd",
+    LS_DAE_ROOT: "fmi-ls-dae-ls-dae-root.xsd",
+    FLAT_INDEX: "fmi-ls-dae-flat-index.xsd",
+    ATTRIBUTES_ONLY: "fmi-ls-dae-attributes-only.xsd",
 }
 
 #: The local name of the root each draft's schema accepts (legacy roots may also be in the ls namespace).
 EXPECTED_ROOTS: dict[str, str] = {
-    drafts.ALPHA1: "fmiDAEManifest",
-    drafts.FORMULATION: "fmiLayeredStandardManifest",
-    drafts.LS_DAE_ROOT: "fmi-ls-dae",
-    drafts.FLAT_INDEX: "fmiLayeredStandardManifest",
-    drafts.ATTRIBUTES_ONLY: "fmi-dae",
+    ALPHA1: "fmiDAEManifest",
+    FORMULATION: "fmiLayeredStandardManifest",
+    LS_DAE_ROOT: "fmi-ls-dae",
+    FLAT_INDEX: "fmiLayeredStandardManifest",
+    ATTRIBUTES_ONLY: "fmi-dae",
 }
 
 _CORE_PREFIX = "fmi-core/"
-_XSI_NAMESPACE = "http://www.w3.org/2001/XMLSchema-instance"
-_PREFIXES = {drafts.LS_NAMESPACE: "fmi-ls", _XSI_NAMESPACE: "xsi"}
 _REMOTE = re.compile(r"^[a-zA-Z][a-zA-Z0-9+.-]*://")
 
 XmlInput = Union["etree._ElementTree", "etree._Element"]
@@ -85,7 +92,7 @@ class SchemaLoadError(RuntimeError):
 def schema_dir() -> Path:
     """The folder holding our per-draft XSDs (``schemas/``, or ``conformance/_schemas`` in a wheel)."""
     folder = schemas_dir()
-    if not (folder / SCHEMA_FILES[drafts.ALPHA1]).is_file():
+    if not (folder / SCHEMA_FILES[ALPHA1]).is_file():
         raise SchemaLoadError(f"the lsdae schemas are missing from {folder}")
     return folder
 
@@ -152,7 +159,7 @@ def model_description_schema() -> etree.XMLSchema:
 
 @functools.lru_cache(maxsize=None)
 def manifest_schema(draft: str) -> etree.XMLSchema:
-    """Our XSD for ``draft`` (one of :data:`conformance.drafts.ALL_DRAFTS`), loaded once per process."""
+    """Our XSD for a draft id of :mod:`conformance.drafts.detect`, loaded once per process."""
     try:
         name = SCHEMA_FILES[draft]
     except KeyError:
@@ -204,8 +211,8 @@ def validate_manifest(tree: XmlInput, draft: str, *, file: str) -> Iterator[Viol
     schema_name = SCHEMA_FILES[draft]
     expected = EXPECTED_ROOTS[draft]
     qname = etree.QName(root)
-    legacy = draft in drafts.LEGACY_DRAFTS
-    accepted_ns = (None, drafts.LS_NAMESPACE) if legacy else (None,)
+    legacy = draft in LEGACY_DRAFTS
+    accepted_ns = (None, LS_NAMESPACE) if legacy else (None,)
     if qname.localname != expected or qname.namespace not in accepted_ns:
         yield _wrong_root(root, draft, expected, file=file, schema_name=schema_name)
         return
@@ -230,7 +237,7 @@ def _run(
     seen: set[tuple[str, str]] = set()
     for entry in entries:
         path = entry.path or None
-        attribute = _attribute_of(entry.message)
+        attribute = attribute_of(entry.message)
         if attribute is not None:
             key = (path or "", attribute)
             if key in seen:
@@ -251,7 +258,7 @@ def _run(
 def _wrong_root(root: etree._Element, draft: str, expected: str, *, file: str, schema_name: str) -> Violation:
     written = _written_name(root)
     namespace = etree.QName(root).namespace
-    if draft == drafts.ALPHA1 and etree.QName(root).localname == expected:
+    if draft == ALPHA1 and etree.QName(root).localname == expected:
         message = (
             f"the root <{written}> is in the namespace {namespace}; the fmi-ls-dae 1.0.0-alpha.1 root "
             "<fmiDAEManifest> and its children are in no namespace (only the three fmi-ls: "
@@ -259,7 +266,7 @@ def _wrong_root(root: etree._Element, draft: str, expected: str, *, file: str, s
         )
     else:
         message = (
-            f"the root element is <{written}>, but the {drafts.DRAFT_LABELS[draft]} "
+            f"the root element is <{written}>, but the {DRAFT_LABELS[draft]} "
             f"has the root <{expected}>"
         )
     return Violation(
@@ -293,7 +300,7 @@ def _elements(root: etree._Element) -> Iterator[etree._Element]:
 
 
 def _has_ls_elements(root: etree._Element) -> bool:
-    return any(etree.QName(e).namespace == drafts.LS_NAMESPACE for e in _elements(root))
+    return any(etree.QName(e).namespace == LS_NAMESPACE for e in _elements(root))
 
 
 def _unqualified_copy(root: etree._Element) -> tuple[etree._Element, list[etree._Element]]:
@@ -305,7 +312,7 @@ def _unqualified_copy(root: etree._Element) -> tuple[etree._Element, list[etree.
     duplicate = copy.deepcopy(root)
     for element in _elements(duplicate):
         qname = etree.QName(element)
-        if qname.namespace == drafts.LS_NAMESPACE:
+        if qname.namespace == LS_NAMESPACE:
             element.tag = qname.localname
     etree.cleanup_namespaces(duplicate)
     return duplicate, list(root.iter())
@@ -320,44 +327,3 @@ def _original_line(copy_root: XmlInput, path: str, originals: list[etree._Elemen
         return None
     index = list(_root_of(copy_root).iter()).index(found[0])
     return originals[index].sourceline if index < len(originals) else None
-
-
-_ATTRIBUTE_RE = re.compile(r"^Element '[^']*', attribute '([^']*)':")
-_CLARK_RE = re.compile(r"\{([^{}'\s]+)\}([A-Za-z_][\w.-]*)")
-_SET_RE = re.compile(r"The value ('[^']*') is not an element of the set \{(.*)\}\.?")
-_FACET_RE = re.compile(r"\[facet '[^']*'\] ")
-_EXPECTED_ONE_RE = re.compile(r"(?<=expected )is one of \( (.*?) \)\.?")
-_EXPECTED_RE = re.compile(r"(?<=expected )is \( (.*?) \)\.?")
-_REDUNDANT_ATTRIBUTE_RE = re.compile(r"Element ('[^']*'), attribute ('[^']*'): The attribute '[^']*' is not allowed\.?")
-_MISSING_ATTRIBUTE_RE = re.compile(r"The attribute ('[^']*') is required but missing\.?")
-
-
-def _attribute_of(message: str) -> str | None:
-    match = _ATTRIBUTE_RE.match(message)
-    return match.group(1) if match else None
-
-
-def clean_message(message: str) -> str:
-    """Tidy a libxml2 schema message: prefixes for namespaces, readable sets and expectations."""
-    text = message.strip()
-    text = _CLARK_RE.sub(_prefixed, text)
-    text = _FACET_RE.sub("", text)
-    text = _SET_RE.sub(lambda m: f"the value {m.group(1)} is not one of {m.group(2)}", text)
-    text = _REDUNDANT_ATTRIBUTE_RE.sub(r"Element \1: attribute \2 is not allowed", text)
-    text = _MISSING_ATTRIBUTE_RE.sub(r"the required attribute \1 is missing", text)
-    text = text.replace("This element is not expected. Expected", "this element is not expected here; expected")
-    text = text.replace("This element is not expected.", "this element is not expected here.")
-    text = text.replace("Missing child element(s). Expected", "missing child element; expected")
-    text = text.replace("Element content is not allowed, because the content type is empty",
-                        "no child elements are allowed here")
-    text = text.replace("No matching global declaration available for the validation root.",
-                        "this root element is not declared by the schema.")
-    text = _EXPECTED_ONE_RE.sub(lambda m: f"one of {m.group(1)}", text)
-    text = _EXPECTED_RE.sub(lambda m: m.group(1), text)
-    return text.rstrip(". ").rstrip()
-
-
-def _prefixed(match: re.Match[str]) -> str:
-    namespace, local = match.group(1), match.group(2)
-    prefix = _PREFIXES.get(namespace)
-    return f"{prefix}:{local}" if prefix else f"[{namespace}]{local}"

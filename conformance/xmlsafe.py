@@ -23,7 +23,7 @@ from dataclasses import replace
 
 from lxml import etree
 
-from conformance.drafts import LS_NAMESPACE
+from conformance.drafts.detect import LS_NAMESPACE
 from conformance.findings import Location, Violation, evidence
 
 log = logging.getLogger(__name__)

@@ -7,10 +7,21 @@ the static part of the catalogue match one to one.
 from __future__ import annotations
 
 from ..context import Check
-from . import algebraic, core, core_structure, enable, header, index1, residual, structure
+from . import (
+    algebraic,
+    enable,
+    header,
+    index1,
+    manifest_dependencies,
+    manifest_lists,
+    model_structure,
+    model_variables,
+    residual,
+)
 
 REGISTRY: dict[str, Check] = {}
-for _module in (header, enable, algebraic, residual, structure, core, core_structure, index1):
+for _module in (header, enable, algebraic, residual, manifest_dependencies, manifest_lists,
+                model_variables, model_structure, index1):
     for _code, _check in _module.CHECKS.items():
         if _code in REGISTRY:  # pragma: no cover - a defect caught by the tests
             raise RuntimeError(f"rule {_code} registered twice")

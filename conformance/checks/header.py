@@ -9,13 +9,10 @@ import re
 from typing import Iterator
 
 from ..context import CheckContext
-from ..drafts import ALPHA1
+from ..drafts.detect import ALPHA1, ALPHA1_DESCRIPTION, ALPHA1_NAME, ALPHA1_VERSION
 from ..findings import Location, Violation, evidence
 from ..manifest import MANIFEST, Manifest
 
-LS_NAME = "org.fmi-standard.fmi-ls-dae"
-LS_DESCRIPTION = "Layered standard for DAE support in FMI."
-ALPHA1_VERSION = "1.0.0-alpha.1"
 MANIFEST_FILE = "fmi-ls-manifest.xml"
 
 # https://semver.org/#is-there-a-suggested-regular-expression-regex-to-check-a-semver-string
@@ -104,12 +101,13 @@ def ls_name_mismatch(ctx: CheckContext) -> Iterator[Violation]:
         return
     attribute = "fmi-ls-name"
     if m.ls_name is None:
-        yield _unqualified(m, attribute) or _missing(m, attribute, LS_NAME)
-    elif m.ls_name != LS_NAME:
+        yield _unqualified(m, attribute) or _missing(m, attribute, ALPHA1_NAME)
+    elif m.ls_name != ALPHA1_NAME:
         yield Violation(
             'the manifest\'s {subject} is not "%s"; importers recognise the layered standard '
-            "by this exact reverse-DNS name" % LS_NAME,
-            _root(m, attribute), evidence(expected=LS_NAME, actual=m.ls_name), subject=attribute)
+            "by this exact reverse-DNS name" % ALPHA1_NAME,
+            _root(m, attribute), evidence(expected=ALPHA1_NAME, actual=m.ls_name),
+            subject=attribute)
 
 
 def ls_version_invalid(ctx: CheckContext) -> Iterator[Violation]:
@@ -154,13 +152,13 @@ def ls_version_invalid(ctx: CheckContext) -> Iterator[Violation]:
 
 def _description_difference(actual: str) -> str:
     """Say in a few words how a description differs from the fixed text."""
-    if actual + "." == LS_DESCRIPTION:
+    if actual + "." == ALPHA1_DESCRIPTION:
         return "the final period is missing"
-    if actual.strip() == LS_DESCRIPTION:
+    if actual.strip() == ALPHA1_DESCRIPTION:
         return "leading or trailing whitespace"
-    if " ".join(actual.split()) == LS_DESCRIPTION:
+    if " ".join(actual.split()) == ALPHA1_DESCRIPTION:
         return "different whitespace"
-    if actual.strip().rstrip(".").lower() == LS_DESCRIPTION.rstrip(".").lower():
+    if actual.strip().rstrip(".").lower() == ALPHA1_DESCRIPTION.rstrip(".").lower():
         return "different letter case" + ("" if actual.strip().endswith(".") else
                                           " and no final period")
     if actual.strip().rstrip(".").endswith("in FMU"):
@@ -177,12 +175,12 @@ def ls_description_mismatch(ctx: CheckContext) -> Iterator[Violation]:
         return
     attribute = "fmi-ls-description"
     if m.ls_description is None:
-        yield _unqualified(m, attribute) or _missing(m, attribute, LS_DESCRIPTION)
-    elif m.ls_description != LS_DESCRIPTION:
+        yield _unqualified(m, attribute) or _missing(m, attribute, ALPHA1_DESCRIPTION)
+    elif m.ls_description != ALPHA1_DESCRIPTION:
         yield Violation(
-            'the manifest\'s {subject} differs from the fixed text "%s"' % LS_DESCRIPTION,
+            'the manifest\'s {subject} differs from the fixed text "%s"' % ALPHA1_DESCRIPTION,
             _root(m, attribute),
-            evidence(expected=LS_DESCRIPTION, actual=m.ls_description,
+            evidence(expected=ALPHA1_DESCRIPTION, actual=m.ls_description,
                      difference=_description_difference(m.ls_description)),
             subject=attribute)
 

@@ -4,7 +4,7 @@ The residual/algebraic-variable graph comes from the manifest ``dependencies`` o
 (an absent attribute means "depends on every algebraic variable", an empty one "on none", MS-20;
 entries that are not algebraic variables do not count). Array variables are expanded into their
 elements; since dependencies are per variable (MS-13), each element of a residual depends on every
-element of the algebraic variables it lists. The graph work is in :mod:`conformance.structure`.
+element of the algebraic variables it lists. The graph work is in :mod:`conformance.matching`.
 """
 from __future__ import annotations
 
@@ -19,7 +19,7 @@ from ..manifest import VrRef
 from ..model import ModelDescription, Unknown, Variable
 
 if TYPE_CHECKING:
-    from ..structure import DulmageMendelsohn
+    from ..matching import DulmageMendelsohn
 
 log = logging.getLogger(__name__)
 
@@ -129,7 +129,7 @@ def _greedy_matching_size(row_deps: Sequence[list[int] | None], n_cols: int) -> 
     """Size of a greedy matching: each row takes its first free column, full rows take what is
     left. Any matching is at most maximum, so when this one already has full size the graph
     is structurally non-singular; it does for the usual near-diagonal patterns, which spares
-    loading scipy. Otherwise Hopcroft-Karp and Dulmage-Mendelsohn decide (conformance.structure).
+    loading scipy. Otherwise Hopcroft-Karp and Dulmage-Mendelsohn decide (conformance.matching).
     """
     taken = bytearray(n_cols)
     size = full = 0
@@ -145,9 +145,8 @@ def _greedy_matching_size(row_deps: Sequence[list[int] | None], n_cols: int) -> 
     return size + min(full, n_cols - size)
 
 
-def index1_structurally_singular(ctx: CheckContext, *, max_names: int = 5,
-                                 max_evidence: int = 100, max_edges: int = 5_000_000
-                                 ) -> Iterator[Violation]:
+def index1_structurally_singular(ctx: CheckContext, *, max_names: int, max_evidence: int,
+                                 max_edges: int) -> Iterator[Violation]:
     """The residual/algebraic-variable graph has a matching of size min(#residuals, #algebraic)."""
     model, manifest = ctx.model, ctx.manifest
     assert model is not None and manifest is not None
@@ -182,7 +181,7 @@ def index1_structurally_singular(ctx: CheckContext, *, max_names: int = 5,
     needed = min(len(rows), len(cols))
     if _greedy_matching_size(row_deps, len(cols)) >= needed:
         return  # a matching of full size was found without the graph machinery
-    from ..structure import BipartitePattern, dulmage_mendelsohn  # scipy: only when needed
+    from ..matching import BipartitePattern, dulmage_mendelsohn  # scipy: only when needed
 
     dm = dulmage_mendelsohn(BipartitePattern.from_rows(row_deps, len(cols)))
     if dm.rank >= needed:

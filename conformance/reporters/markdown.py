@@ -13,7 +13,7 @@ import re
 from typing import Any
 
 from ..catalogue import Catalogue
-from ..drafts import DRAFT_LABELS
+from ..drafts.detect import DRAFT_LABELS
 from ..findings import Finding, FmuReport, Report, RunInfo, Severity
 from .sarif import RULES_DOC_URL, inner_location, is_baselined, rule_url
 

@@ -1,5 +1,5 @@
-"""Unit tests of the core modelDescription checks (conformance/checks/core.py and
-core_structure.py, DAE5xx)."""
+"""Unit tests of the core modelDescription checks (conformance/checks/model_variables.py and
+model_structure.py, DAE5xx)."""
 from __future__ import annotations
 
 import time
@@ -7,7 +7,7 @@ import time
 import pytest
 from lxml import etree
 
-from conformance.checks import core, core_structure
+from conformance.checks import model_structure, model_variables
 from conformance.context import CheckContext
 from conformance.manifest import read_manifest
 from conformance.model import read_model_description
@@ -56,7 +56,7 @@ def ctx_of(xml: str | None = None, *, manifest: str | None = None, **parts: str)
     return CheckContext(model=model, manifest=man, draft="alpha1" if man else None)
 
 
-CHECKS = {**core.CHECKS, **core_structure.CHECKS}
+CHECKS = {**model_variables.CHECKS, **model_structure.CHECKS}
 
 
 def run(code: str, ctx: CheckContext) -> list:
@@ -128,7 +128,7 @@ def test_alias_names_take_part_when_the_model_reads_them():
                            "aliases": (Alias("x"),) if v.name == "z" else ("zz",)})()
             for v in model.variables]
     fake_model = type("M", (), {"variables": fake, "file": model.file})()
-    found = list(core.variable_name_duplicate(CheckContext(fake_model, None, None)))
+    found = list(model_variables.variable_name_duplicate(CheckContext(fake_model, None, None)))
     # 'x' reused by an alias of z; 'zz' is the alias of every other variable.
     assert [v.subject for v in found].count("x") == 1
     assert [v.subject for v in found].count("zz") == len(fake) - 2

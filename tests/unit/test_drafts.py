@@ -1,4 +1,4 @@
-"""Draft recognition, migration hints and the legacy/unrecognised violations (conformance/drafts.py)."""
+"""Draft recognition, migration hints and the legacy/unrecognised violations (conformance/drafts/)."""
 from __future__ import annotations
 
 from pathlib import Path
@@ -8,25 +8,25 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from lxml import etree
 
-from conformance import drafts
+from conformance.drafts import detect, migrate
 
 DATA = Path(__file__).parent / "data" / "manifests"
 
 EXPECTED_DRAFT = {
-    "alpha1.xml": drafts.ALPHA1,
-    "formulation-default-ns.xml": drafts.FORMULATION,
-    "formulation-unqualified.xml": drafts.FORMULATION,
-    "formulation-no-enable.xml": drafts.FORMULATION,
-    "formulation-enable-attribute.xml": drafts.FORMULATION,
-    "formulation-nominal.xml": drafts.FORMULATION,
-    "formulation-higher-index.xml": drafts.FORMULATION,
-    "ls-dae-root-prefixed.xml": drafts.LS_DAE_ROOT,
-    "ls-dae-root-mixed.xml": drafts.LS_DAE_ROOT,
-    "ls-dae-root-default-ns.xml": drafts.LS_DAE_ROOT,
-    "attributes-only.xml": drafts.ATTRIBUTES_ONLY,
-    "flat-index.xml": drafts.FLAT_INDEX,
-    "flat-index-no-index.xml": drafts.FLAT_INDEX,
-    "unknown-root.xml": drafts.UNKNOWN,
+    "alpha1.xml": detect.ALPHA1,
+    "formulation-default-ns.xml": detect.FORMULATION,
+    "formulation-unqualified.xml": detect.FORMULATION,
+    "formulation-no-enable.xml": detect.FORMULATION,
+    "formulation-enable-attribute.xml": detect.FORMULATION,
+    "formulation-nominal.xml": detect.FORMULATION,
+    "formulation-higher-index.xml": detect.FORMULATION,
+    "ls-dae-root-prefixed.xml": detect.LS_DAE_ROOT,
+    "ls-dae-root-mixed.xml": detect.LS_DAE_ROOT,
+    "ls-dae-root-default-ns.xml": detect.LS_DAE_ROOT,
+    "attributes-only.xml": detect.ATTRIBUTES_ONLY,
+    "flat-index.xml": detect.FLAT_INDEX,
+    "flat-index-no-index.xml": detect.FLAT_INDEX,
+    "unknown-root.xml": detect.UNKNOWN,
 }
 
 
@@ -40,7 +40,7 @@ def from_text(text: str) -> etree._Element:
 
 def hints_of(name: str) -> tuple[str, ...]:
     root = load(name)
-    return drafts.migration_hints(root, drafts.detect_draft(root))
+    return migrate.migration_hints(root, detect.detect_draft(root))
 
 
 def test_every_data_file_has_an_expectation() -> None:
@@ -49,7 +49,7 @@ def test_every_data_file_has_an_expectation() -> None:
 
 @pytest.mark.parametrize("name", sorted(EXPECTED_DRAFT))
 def test_detect_draft(name: str) -> None:
-    assert drafts.detect_draft(load(name)) == EXPECTED_DRAFT[name]
+    assert detect.detect_draft(load(name)) == EXPECTED_DRAFT[name]
 
 
 def test_shared_root_without_residuals_is_formulation() -> None:
@@ -57,7 +57,7 @@ def test_shared_root_without_residuals_is_formulation() -> None:
         '<fmiLayeredStandardManifest xmlns="http://fmi-standard.org/fmi-ls-manifest">'
         "<AlgebraicVariables/><ModelStructure/></fmiLayeredStandardManifest>"
     )
-    assert drafts.detect_draft(root) == drafts.FORMULATION
+    assert detect.detect_draft(root) == detect.FORMULATION
 
 
 @pytest.mark.parametrize(
@@ -69,41 +69,41 @@ def test_shared_root_without_residuals_is_formulation() -> None:
     ],
 )
 def test_foreign_roots_are_unknown(text: str) -> None:
-    assert drafts.detect_draft(from_text(text)) == drafts.UNKNOWN
+    assert detect.detect_draft(from_text(text)) == detect.UNKNOWN
 
 
 def test_alpha1_root_in_ls_namespace_is_still_alpha1() -> None:
     # Recognised by name; the alpha.1 schema then reports the namespace as a schema violation.
     root = from_text('<fmiDAEManifest xmlns="http://fmi-standard.org/fmi-ls-manifest"/>')
-    assert drafts.detect_draft(root) == drafts.ALPHA1
+    assert detect.detect_draft(root) == detect.ALPHA1
 
 
 @pytest.mark.parametrize(
     ("text", "expected"),
     [
         ("auto", "auto"),
-        ("alpha1", drafts.ALPHA1),
-        (" Alpha.1 ", drafts.ALPHA1),
-        ("1.0.0-alpha.1", drafts.ALPHA1),
-        ("formulation", drafts.FORMULATION),
-        ("ls_dae_root", drafts.LS_DAE_ROOT),
-        ("fmi-dae", drafts.ATTRIBUTES_ONLY),
-        ("flat-index", drafts.FLAT_INDEX),
-        ("attributes-only", drafts.ATTRIBUTES_ONLY),
+        ("alpha1", detect.ALPHA1),
+        (" Alpha.1 ", detect.ALPHA1),
+        ("1.0.0-alpha.1", detect.ALPHA1),
+        ("formulation", detect.FORMULATION),
+        ("ls_dae_root", detect.LS_DAE_ROOT),
+        ("fmi-dae", detect.ATTRIBUTES_ONLY),
+        ("flat-index", detect.FLAT_INDEX),
+        ("attributes-only", detect.ATTRIBUTES_ONLY),
     ],
 )
 def test_parse_draft_option(text: str, expected: str) -> None:
-    assert drafts.parse_draft_option(text) == expected
+    assert detect.parse_draft_option(text) == expected
 
 
 @pytest.mark.parametrize("text", ["", "alpha2", "unknown", "legacy"])
 def test_parse_draft_option_rejects(text: str) -> None:
     with pytest.raises(ValueError):
-        drafts.parse_draft_option(text)
+        detect.parse_draft_option(text)
 
 
 def test_labels_cover_every_draft() -> None:
-    assert set(drafts.DRAFT_LABELS) == set(drafts.ALL_DRAFTS) | {drafts.UNKNOWN}
+    assert set(detect.DRAFT_LABELS) == set(detect.ALL_DRAFTS) | {detect.UNKNOWN}
 
 
 # --------------------------------------------------------------------------------------------
@@ -113,9 +113,9 @@ def test_labels_cover_every_draft() -> None:
 @pytest.mark.parametrize("name", sorted(EXPECTED_DRAFT))
 def test_one_legacy_violation_per_legacy_manifest(name: str) -> None:
     root = load(name)
-    draft = drafts.detect_draft(root)
-    found = list(drafts.legacy_violations(root, draft, file="extra/m.xml"))
-    if draft not in drafts.LEGACY_DRAFTS:
+    draft = detect.detect_draft(root)
+    found = list(migrate.legacy_violations(root, draft, file="extra/m.xml"))
+    if draft not in detect.LEGACY_DRAFTS:
         assert found == []
         return
     assert len(found) == 1
@@ -125,8 +125,8 @@ def test_one_legacy_violation_per_legacy_manifest(name: str) -> None:
     assert violation.location.line == root.sourceline
     ev = dict(violation.evidence)
     assert ev["draft"] == draft
-    assert ev["draft_label"] == drafts.DRAFT_LABELS[draft]
-    assert ev["hints"] == drafts.migration_hints(root, draft)
+    assert ev["draft_label"] == detect.DRAFT_LABELS[draft]
+    assert ev["hints"] == migrate.migration_hints(root, draft)
     assert ev["hints"], "a legacy manifest always needs at least the root rename"
     # The hints are repeated in the message so a console user sees them.
     assert all(hint in violation.message for hint in ev["hints"])
@@ -173,7 +173,7 @@ def test_enable_root_attribute_by_name() -> None:
 def test_enable_root_attribute_by_value_reference() -> None:
     text = (DATA / "formulation-enable-attribute.xml").read_text()
     root = from_text(text.replace('enableDAEModeVariable="dae"', 'enableDAEModeVariable="1"').split("?>", 1)[1])
-    hints = drafts.migration_hints(root, drafts.FORMULATION)
+    hints = migrate.migration_hints(root, detect.FORMULATION)
     assert (
         'replace the root attribute `enableDAEModeVariable="1"` by '
         '`<EnableDAEParameter valueReference="1"/>` as the root\'s first child'
@@ -200,12 +200,12 @@ def test_nominal_and_header_hints() -> None:
 
 def test_higher_index_residual_is_not_a_rename() -> None:
     root = load("formulation-higher-index.xml")
-    hints = drafts.migration_hints(root, drafts.FORMULATION)
+    hints = migrate.migration_hints(root, detect.FORMULATION)
     (higher,) = [h for h in hints if "higher-index" in h]
     assert "line 16" in higher and "value references 6, 8" in higher
     assert not any('valueReference="6"' in h and h.startswith("flatten") for h in hints)
     assert any('valueReference="7"' in h and h.startswith("flatten") for h in hints)
-    (violation,) = drafts.legacy_violations(root, drafts.FORMULATION, file="m.xml")
+    (violation,) = migrate.legacy_violations(root, detect.FORMULATION, file="m.xml")
     assert dict(violation.evidence)["higher_index_residual_lines"] == (16,)
 
 
@@ -217,7 +217,7 @@ def test_many_residuals_are_summarised() -> None:
         '<fmiLayeredStandardManifest><EnableDAE valueReference="1"/><AlgebraicVariables/>'
         f"<ModelStructure>{residuals}</ModelStructure></fmiLayeredStandardManifest>"
     )
-    hints = drafts.migration_hints(root, drafts.FORMULATION)
+    hints = migrate.migration_hints(root, detect.FORMULATION)
     flatten = [h for h in hints if h.startswith("flatten")]
     assert len(flatten) == 1 and 'valueReference="100"' in flatten[0]
     (rest,) = [h for h in hints if h.startswith("likewise")]
@@ -245,15 +245,15 @@ def test_flat_index_hints() -> None:
 
 def test_attributes_only_hints() -> None:
     root = load("attributes-only.xml")
-    hints = drafts.migration_hints(root, drafts.ATTRIBUTES_ONLY)
+    hints = migrate.migration_hints(root, detect.ATTRIBUTES_ONLY)
     assert any("rename the root `<fmi-dae>`" in h and 'drop `isDaeFmu="true"`' in h for h in hints)
     assert any(h.startswith("add an `<EnableDAEParameter") for h in hints)
     assert any("<AlgebraicVariables>" in h and "<Residual" in h for h in hints)
 
 
 def test_alpha1_and_unknown_have_no_hints() -> None:
-    assert drafts.migration_hints(load("alpha1.xml"), drafts.ALPHA1) == ()
-    assert drafts.migration_hints(load("unknown-root.xml"), drafts.UNKNOWN) == ()
+    assert migrate.migration_hints(load("alpha1.xml"), detect.ALPHA1) == ()
+    assert migrate.migration_hints(load("unknown-root.xml"), detect.UNKNOWN) == ()
 
 
 # --------------------------------------------------------------------------------------------
@@ -262,13 +262,13 @@ def test_alpha1_and_unknown_have_no_hints() -> None:
 
 def test_unrecognised_violation() -> None:
     root = load("unknown-root.xml")
-    (violation,) = drafts.unrecognised_violations(root, file="m.xml")
+    (violation,) = detect.unrecognised_violations(root, file="m.xml")
     assert violation.rule == "draft-unrecognised"
     assert violation.location.line == root.sourceline
     assert dict(violation.evidence)["root"] == "daeManifest"
     for name, draft in EXPECTED_DRAFT.items():
-        if draft != drafts.UNKNOWN:
-            assert list(drafts.unrecognised_violations(load(name), file="m.xml")) == []
+        if draft != detect.UNKNOWN:
+            assert list(detect.unrecognised_violations(load(name), file="m.xml")) == []
 
 
 # --------------------------------------------------------------------------------------------
@@ -279,7 +279,7 @@ _NAMES = st.sampled_from([
     "EnableDAEParameter", "AlgebraicVariables", "AlgebraicVariable", "ModelStructure", "Residual",
     "Formulation", "Output", "InitialUnknown", "Invariant", "Annotations", "x",
 ])
-_NAMESPACES = st.sampled_from([None, drafts.LS_NAMESPACE, "urn:other"])
+_NAMESPACES = st.sampled_from([None, detect.LS_NAMESPACE, "urn:other"])
 _ATTRIBUTES = st.dictionaries(
     st.sampled_from(["valueReference", "index", "nominal", "dependencies", "enableDAEModeVariable",
                      "isDaeFmu", "{http://fmi-standard.org/fmi-ls-manifest}fmi-ls-version"]),
@@ -301,10 +301,10 @@ def _trees(draw: st.DrawFn, depth: int = 0) -> etree._Element:
 @settings(max_examples=200, deadline=None)
 @given(_trees())
 def test_never_raises(root: etree._Element) -> None:
-    draft = drafts.detect_draft(root)
-    assert draft in drafts.ALL_DRAFTS + (drafts.UNKNOWN,)
-    for candidate in drafts.ALL_DRAFTS + (drafts.UNKNOWN,):
-        drafts.migration_hints(root, candidate)
-        for violation in drafts.legacy_violations(root, candidate, file="m.xml"):
+    draft = detect.detect_draft(root)
+    assert draft in detect.ALL_DRAFTS + (detect.UNKNOWN,)
+    for candidate in detect.ALL_DRAFTS + (detect.UNKNOWN,):
+        migrate.migration_hints(root, candidate)
+        for violation in migrate.legacy_violations(root, candidate, file="m.xml"):
             assert violation.rule == "legacy-draft-shape" and violation.message
-    list(drafts.unrecognised_violations(root, file="m.xml"))
+    list(detect.unrecognised_violations(root, file="m.xml"))

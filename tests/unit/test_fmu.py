@@ -8,6 +8,7 @@ import sys
 import tempfile
 import warnings
 import zipfile
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
@@ -21,6 +22,7 @@ from conformance.fmu import (
     ArchiveLimits,
     ArchiveReadError,
     FmuSource,
+    default_limits,
     find_manifest_candidates,
     open_fmu,
 )
@@ -30,6 +32,11 @@ MD = b'<?xml version="1.0" encoding="UTF-8"?>\n<fmiModelDescription/>\n'
 SUPPRESS = [HealthCheck.function_scoped_fixture]  # tmp_path is reused; each example overwrites
 EMITTED = {"archive-unreadable", "unsafe-archive-path", "archive-duplicate-entry",
            "archive-too-large", "archive-compression-method"}
+
+
+def limits_with(**changes: int) -> ArchiveLimits:
+    """The catalogue's limits with some of them changed."""
+    return replace(default_limits(), **changes)
 
 
 # -- building hostile archives -------------------------------------------------------------------
@@ -233,12 +240,12 @@ def test_ratio_limit_spares_small_members(tmp_path: Path) -> None:
 def test_member_and_total_limits(tmp_path: Path) -> None:
     fmu = make_zip(tmp_path / "m.fmu", [(MODEL_DESCRIPTION, MD), ("a.bin", os.urandom(3000)),
                                         ("b.bin", os.urandom(3000))])
-    limits = ArchiveLimits(max_member=2000)
+    limits = limits_with(max_member=2000)
     source, violations = open_fmu(fmu, limits=limits)
     assert rules_of(violations) == {"archive-too-large"} and len(violations) == 2
     assert source is not None and source.names() == [MODEL_DESCRIPTION]
     source.close()
-    source, violations = open_fmu(fmu, limits=ArchiveLimits(max_total_uncompressed=5000))
+    source, violations = open_fmu(fmu, limits=limits_with(max_total_uncompressed=5000))
     assert rules_of(violations) == {"archive-too-large"} and len(violations) == 1
     assert source is not None and source.read("a.bin")  # the total is reported, members still read
     source.close()
@@ -246,7 +253,7 @@ def test_member_and_total_limits(tmp_path: Path) -> None:
 
 def test_too_many_members(tmp_path: Path) -> None:
     fmu = make_zip(tmp_path / "m.fmu", [(f"f{i}.txt", b"x") for i in range(20)])
-    source, violations = open_fmu(fmu, limits=ArchiveLimits(max_members=10))
+    source, violations = open_fmu(fmu, limits=limits_with(max_members=10))
     assert source is None and rules_of(violations) == {"archive-too-large"}
 
 
@@ -269,7 +276,7 @@ def test_reading_counts_actual_bytes(tmp_path: Path) -> None:
     folder.mkdir()
     (folder / MODEL_DESCRIPTION).write_bytes(MD)
     (folder / "grows.bin").write_bytes(b"x" * 500)
-    source, violations = open_fmu(folder, limits=ArchiveLimits(max_member=1000))
+    source, violations = open_fmu(folder, limits=limits_with(max_member=1000))
     assert violations == [] and source is not None
     (folder / "grows.bin").write_bytes(b"x" * (3 << 20))
     with pytest.raises(ArchiveReadError) as info:
@@ -422,7 +429,7 @@ def test_folder_case_duplicates_and_limits(tmp_path: Path) -> None:
         pytest.skip("case-insensitive file system")
     (folder / "readme.txt").write_bytes(b"b")
     (folder / "big.bin").write_bytes(b"x" * 5000)
-    source, violations = open_fmu(folder, limits=ArchiveLimits(max_member=4000))
+    source, violations = open_fmu(folder, limits=limits_with(max_member=4000))
     assert rules_of(violations) == {"archive-duplicate-entry", "archive-too-large"}
     assert source is not None and "big.bin" not in source.names()
     assert source.read("readme.txt") == b"b"
@@ -459,7 +466,7 @@ def test_extract_writes_only_into_the_private_destination(tmp_path: Path, privat
 def test_extract_subset_and_bounded(tmp_path: Path, private_tmp: Path) -> None:
     fmu = make_zip(tmp_path / "m.fmu", [(MODEL_DESCRIPTION, MD), ("a.bin", b"a" * 3000),
                                         ("b.bin", b"b" * 3000)])
-    source, _ = open_fmu(fmu, limits=ArchiveLimits(max_total_uncompressed=4000))
+    source, _ = open_fmu(fmu, limits=limits_with(max_total_uncompressed=4000))
     assert source is not None
     found = source.extract_to(private_tmp, names=["a.bin", "b.bin", "missing"])
     assert rules_of(found) == {"archive-too-large"}
@@ -493,10 +500,11 @@ def test_extract_refuses_a_destination_that_is_not_private(tmp_path: Path,
 # -- limits and catalogue -------------------------------------------------------------------------
 
 
-def test_limits_defaults_match_the_catalogue() -> None:
+def test_default_limits_are_the_catalogue_options() -> None:
     catalogue = load_catalogue(rules_dir())
     options = catalogue["archive-too-large"].option_values
-    assert ArchiveLimits.from_options(options) == ArchiveLimits()
+    assert default_limits() == ArchiveLimits.from_options(options)
+    assert {k: getattr(default_limits(), k) for k in options} == options
     assert set(options) == {"max_total_uncompressed", "max_member", "max_ratio",
                             "ratio_min_size", "max_members"}
     for rule in EMITTED:
@@ -504,9 +512,12 @@ def test_limits_defaults_match_the_catalogue() -> None:
 
 
 def test_limits_from_options_rejects_nonsense() -> None:
+    options = load_catalogue(rules_dir())["archive-too-large"].option_values
     with pytest.raises(ValueError):
-        ArchiveLimits.from_options({"max_member": 0})
-    assert ArchiveLimits.from_options({"max_member": 7, "other": 1}).max_member == 7
+        ArchiveLimits.from_options({**options, "max_member": 0})
+    with pytest.raises(ValueError):
+        ArchiveLimits.from_options({"max_member": 7})  # the other limits are missing
+    assert ArchiveLimits.from_options({**options, "max_member": 7, "other": 1}).max_member == 7
 
 
 # -- never raises ---------------------------------------------------------------------------------

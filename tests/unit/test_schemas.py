@@ -8,8 +8,10 @@ from pathlib import Path
 import pytest
 from lxml import etree
 
-from conformance import drafts, schemas
+from conformance import schemas
+from conformance.drafts import detect, migrate
 from conformance.findings import Violation
+from conformance.schema_messages import clean_message
 
 DATA = Path(__file__).parent / "data" / "manifests"
 SHAPES = sorted(p.name for p in DATA.glob("*.xml") if p.name != "unknown-root.xml")
@@ -62,7 +64,7 @@ def parse_text(text: str) -> etree._ElementTree:
 
 def manifest_violations(tree: etree._ElementTree, draft: str | None = None) -> list[Violation]:
     root = tree.getroot()
-    return list(schemas.validate_manifest(tree, draft or drafts.detect_draft(root), file="extra/m.xml"))
+    return list(schemas.validate_manifest(tree, draft or detect.detect_draft(root), file="extra/m.xml"))
 
 
 def assert_clean_messages(found: list[Violation]) -> None:
@@ -73,12 +75,12 @@ def assert_clean_messages(found: list[Violation]) -> None:
 
 
 def test_every_draft_has_a_schema_file() -> None:
-    assert set(schemas.SCHEMA_FILES) == set(drafts.ALL_DRAFTS)
+    assert set(schemas.SCHEMA_FILES) == set(detect.ALL_DRAFTS)
     for name in schemas.SCHEMA_FILES.values():
         assert (schemas.schema_dir() / name).is_file()
 
 
-@pytest.mark.parametrize("draft", drafts.ALL_DRAFTS)
+@pytest.mark.parametrize("draft", detect.ALL_DRAFTS)
 def test_every_schema_loads(draft: str) -> None:
     assert isinstance(schemas.manifest_schema(draft), etree.XMLSchema)
 
@@ -95,7 +97,7 @@ def test_broken_variant_reports_the_right_line(name: str, old: str, new: str) ->
     broken = text.replace(old, new)
     line = broken.splitlines().index(next(ln for ln in broken.splitlines() if new.splitlines()[0] in ln)) + 1
     tree = etree.ElementTree(etree.fromstring(broken.encode()))
-    found = manifest_violations(tree, drafts.detect_draft(etree.fromstring(text.encode())))
+    found = manifest_violations(tree, detect.detect_draft(etree.fromstring(text.encode())))
     assert found, f"{name}: no schema violation for {new!r}"
     assert_clean_messages(found)
     assert {v.location.line for v in found} == {line}, [(v.location.line, v.message) for v in found]
@@ -126,18 +128,18 @@ def test_alpha1_header_and_enable_cardinality_are_left_to_the_semantic_rules() -
 
 def test_forced_draft_with_another_root() -> None:
     tree = parse_file("alpha1.xml")
-    found = manifest_violations(tree, drafts.FORMULATION)
+    found = manifest_violations(tree, detect.FORMULATION)
     assert len(found) == 1 and found[0].location.line == tree.getroot().sourceline
     assert dict(found[0].evidence)["expected_root"] == "fmiLayeredStandardManifest"
 
 
 def test_unknown_draft_yields_nothing() -> None:
-    assert manifest_violations(parse_file("unknown-root.xml"), drafts.UNKNOWN) == []
+    assert manifest_violations(parse_file("unknown-root.xml"), detect.UNKNOWN) == []
 
 
 def test_validate_accepts_an_element_too() -> None:
     root = parse_file("formulation-default-ns.xml").getroot()
-    assert list(schemas.validate_manifest(root, drafts.FORMULATION, file="m.xml")) == []
+    assert list(schemas.validate_manifest(root, detect.FORMULATION, file="m.xml")) == []
 
 
 def test_legacy_validation_leaves_the_tree_alone() -> None:
@@ -256,7 +258,7 @@ def no_network(monkeypatch: pytest.MonkeyPatch) -> list[tuple[object, ...]]:
 
 def test_loading_and_validating_never_touch_the_network(no_network: list[tuple[object, ...]]) -> None:
     schemas.model_description_schema()
-    for draft in drafts.ALL_DRAFTS:
+    for draft in detect.ALL_DRAFTS:
         schemas.manifest_schema(draft)
     for name in SHAPES:  # one of them carries an https xsi:schemaLocation
         assert manifest_violations(parse_file(name)) == []
@@ -299,9 +301,9 @@ def test_clean_message() -> None:
         "Element 'Float64', attribute 'causality': [facet 'enumeration'] The value 'x' is not an "
         "element of the set {'input', 'output'}."
     )
-    cleaned = schemas.clean_message(message)
+    cleaned = clean_message(message)
     assert "{" not in cleaned and "[facet" not in cleaned and "'input', 'output'" in cleaned
-    cleaned = schemas.clean_message(
+    cleaned = clean_message(
         "Element '{http://fmi-standard.org/fmi-ls-manifest}X': This element is not expected. "
         "Expected is one of ( A, B )."
     )
@@ -322,10 +324,10 @@ def _catalogue_examples() -> list[tuple[str, str, str]]:
 @pytest.mark.parametrize(("name", "kind", "text"), _catalogue_examples(), ids=lambda v: str(v)[:24])
 def test_catalogue_examples(name: str, kind: str, text: str) -> None:
     root = etree.fromstring(text.strip().encode())
-    draft = drafts.detect_draft(root)
+    draft = detect.detect_draft(root)
     fired = {
         "schema-violation": bool(list(schemas.validate_manifest(root, draft, file="m.xml"))),
-        "legacy-draft-shape": bool(list(drafts.legacy_violations(root, draft, file="m.xml"))),
-        "draft-unrecognised": bool(list(drafts.unrecognised_violations(root, file="m.xml"))),
+        "legacy-draft-shape": bool(list(migrate.legacy_violations(root, draft, file="m.xml"))),
+        "draft-unrecognised": bool(list(detect.unrecognised_violations(root, file="m.xml"))),
     }
     assert fired == {rule: (rule == name and kind == "bad") for rule in fired}

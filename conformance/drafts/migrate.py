@@ -1,26 +1,8 @@
-"""Which fmi-ls-dae draft a manifest follows, and how to migrate it to 1.0.0-alpha.1.
-
-Draft ids (stable, used in the catalogue's ``drafts`` field and by ``--draft``):
-
-- ``alpha1``: 1.0.0-alpha.1 / the 2026 paper. Root ``fmiDAEManifest`` (no namespace),
-  ``EnableDAEParameter``, flat ``Residual``. Normative.
-- ``formulation``: spring/summer 2026 drafts and the Reference-FMUs: root
-  ``fmiLayeredStandardManifest`` (ls namespace or unqualified), ``EnableDAE`` (or none, or a root
-  attribute ``enableDAEModeVariable``), ``<Residual><Formulation index=.. valueReference=../></Residual>``.
-- ``ls-dae-root``: summer 2026 exporters: root ``fmi-ls:fmi-ls-dae`` in the ls namespace,
-  Formulation residuals.
-- ``flat-index``: the first manifest chapter: root ``fmiLayeredStandardManifest`` with flat
-  ``<Residual valueReference=.. index=..>``.
-- ``attributes-only``: April 2026 draft schema: root ``fmi-dae`` with ``isDaeFmu``, no content.
-
-Recognition looks at the root's local name (in no namespace or the ls namespace) and, for the
-shared root ``fmiLayeredStandardManifest``, at the form of the residuals: any
-``<Residual><Formulation/></Residual>`` means ``formulation``; flat residuals (with or without
-``index``) mean ``flat-index``; no residuals at all mean ``formulation``, the common case.
+"""How a manifest of a legacy draft migrates to fmi-ls-dae 1.0.0-alpha.1.
 
 A legacy manifest gives one ``legacy-draft-shape`` warning whose message and evidence carry
-concrete migration hints, naming the value references found in the file. A root that is none
-of the known shapes gives ``draft-unrecognised``.
+concrete migration hints, naming the value references found in the file; alpha.1 manifests and
+unrecognised roots give none (those are :mod:`conformance.drafts.detect`'s business).
 """
 from __future__ import annotations
 
@@ -28,36 +10,25 @@ from typing import Iterator, Sequence
 
 from lxml import etree
 
-from .findings import Location, Violation, evidence
-
-ALPHA1 = "alpha1"
-FORMULATION = "formulation"
-LS_DAE_ROOT = "ls-dae-root"
-FLAT_INDEX = "flat-index"
-ATTRIBUTES_ONLY = "attributes-only"
-UNKNOWN = "unknown"
-
-ALL_DRAFTS = (ALPHA1, FORMULATION, LS_DAE_ROOT, FLAT_INDEX, ATTRIBUTES_ONLY)
-LEGACY_DRAFTS = (FORMULATION, LS_DAE_ROOT, FLAT_INDEX, ATTRIBUTES_ONLY)
-
-LS_NAMESPACE = "http://fmi-standard.org/fmi-ls-manifest"
-
-AUTO = "auto"
-
-#: Human labels, for messages and reports.
-DRAFT_LABELS: dict[str, str] = {
-    ALPHA1: "fmi-ls-dae 1.0.0-alpha.1 (September 2026, the 2026 paper)",
-    FORMULATION: "Formulation draft (spring/summer 2026, Reference-FMUs)",
-    LS_DAE_ROOT: "fmi-ls-dae root draft (summer 2026 exporters)",
-    FLAT_INDEX: "flat-index draft (first manifest chapter)",
-    ATTRIBUTES_ONLY: "attributes-only draft (April 2026 schema, root fmi-dae)",
-    UNKNOWN: "unrecognised manifest shape",
-}
-
-#: The alpha.1 header values.
-ALPHA1_NAME = "org.fmi-standard.fmi-ls-dae"
-ALPHA1_VERSION = "1.0.0-alpha.1"
-ALPHA1_DESCRIPTION = "Layered standard for DAE support in FMI."
+from ..findings import Location, Violation, evidence
+from .detect import (
+    ALPHA1_DESCRIPTION,
+    ALPHA1_NAME,
+    ALPHA1_VERSION,
+    ATTRIBUTES_ONLY,
+    DRAFT_LABELS,
+    FLAT_INDEX,
+    LEGACY_DRAFTS,
+    LS_NAMESPACE,
+)
+from .elements import (
+    all_elements,
+    children_named,
+    element_children,
+    first_child,
+    residual_elements,
+    written_name,
+)
 
 #: alpha.1 order of the manifest ModelStructure children.
 MODEL_STRUCTURE_ORDER = (
@@ -65,55 +36,10 @@ MODEL_STRUCTURE_ORDER = (
     "EventIndicator", "Residual", "Invariant",
 )
 
-_ROOTS = {
-    "fmiDAEManifest": ALPHA1,
-    "fmi-ls-dae": LS_DAE_ROOT,
-    "fmi-dae": ATTRIBUTES_ONLY,
-}
-_SHARED_ROOT = "fmiLayeredStandardManifest"
-
-_OPTION_ALIASES = {
-    "alpha.1": ALPHA1, "alpha-1": ALPHA1, "1.0.0-alpha.1": ALPHA1, "a1": ALPHA1,
-    "fmi-ls-dae": LS_DAE_ROOT, "ls-dae": LS_DAE_ROOT,
-    "fmi-dae": ATTRIBUTES_ONLY, "attributes": ATTRIBUTES_ONLY,
-    "flat": FLAT_INDEX,
-}
-
 # How many residuals get a hint of their own before the rest are summarised.
 _MAX_SPELLED_OUT = 3
 # How many value references a summary lists before "and N more".
 _MAX_LISTED = 12
-
-
-# --------------------------------------------------------------------------------------------
-# Recognition
-
-
-def detect_draft(root: etree._Element) -> str:
-    """The draft id the manifest ``root`` follows, or :data:`UNKNOWN`."""
-    qname = etree.QName(root)
-    if qname.namespace not in (None, LS_NAMESPACE):
-        return UNKNOWN
-    if qname.localname in _ROOTS:
-        return _ROOTS[qname.localname]
-    if qname.localname != _SHARED_ROOT:
-        return UNKNOWN
-    residuals = _residuals(root)
-    if any(_children(r, "Formulation") for r in residuals):
-        return FORMULATION
-    if residuals:
-        return FLAT_INDEX
-    return FORMULATION
-
-
-def parse_draft_option(text: str) -> str:
-    """Parse ``--draft``: ``auto`` or a draft id (a few spellings accepted), else ``ValueError``."""
-    key = text.strip().lower().replace("_", "-")
-    if key == AUTO or key in ALL_DRAFTS:
-        return key
-    if key in _OPTION_ALIASES:
-        return _OPTION_ALIASES[key]
-    raise ValueError(f"unknown draft {text!r}; use one of: {', '.join((AUTO,) + ALL_DRAFTS)}")
 
 
 # --------------------------------------------------------------------------------------------
@@ -135,8 +61,9 @@ def legacy_violations(root: etree._Element, draft: str, *, file: str) -> Iterato
         if not _is_true(root.get("isDaeFmu")):
             lead += " (and isDaeFmu is false, so it does not even claim DAE support)"
     message = f"{lead}. To migrate: " + "; ".join(hints) if hints else lead
-    written = _written_name(root)
-    higher = [r.sourceline for r in _residuals(root) if len(_children(r, "Formulation")) > 1]
+    written = written_name(root)
+    higher = [r.sourceline for r in residual_elements(root)
+              if len(children_named(r, "Formulation")) > 1]
     yield Violation(
         message=message,
         location=Location(file=file, line=root.sourceline, path="/" + written),
@@ -149,31 +76,6 @@ def legacy_violations(root: etree._Element, draft: str, *, file: str) -> Iterato
         ),
         subject=draft,
         rule="legacy-draft-shape",
-    )
-
-
-def unrecognised_violations(root: etree._Element, *, file: str) -> Iterator[Violation]:
-    """One ``draft-unrecognised`` violation when the root is none of the known shapes."""
-    if detect_draft(root) != UNKNOWN:
-        return
-    written = _written_name(root)
-    namespace = etree.QName(root).namespace
-    where = f" in the namespace {namespace}" if namespace else " in no namespace"
-    message = (
-        f"the manifest root <{written}>{where} is none of the known fmi-ls-dae shapes; "
-        f"fmi-ls-dae {ALPHA1_VERSION} expects <fmiDAEManifest> in no namespace, with the "
-        "fmi-ls: attributes in the namespace " + LS_NAMESPACE
-    )
-    yield Violation(
-        message=message,
-        location=Location(file=file, line=root.sourceline, path="/" + written),
-        evidence=evidence(
-            root=written,
-            namespace=namespace,
-            known_roots=("fmiDAEManifest", _SHARED_ROOT, "fmi-ls-dae", "fmi-dae"),
-        ),
-        subject=written,
-        rule="draft-unrecognised",
     )
 
 
@@ -207,7 +109,7 @@ def migration_hints(root: etree._Element, draft: str) -> tuple[str, ...]:
 
 
 def _root_hint(root: etree._Element, draft: str) -> str:
-    written = _written_name(root)
+    written = written_name(root)
     hint = f"rename the root `<{written}>` to `<fmiDAEManifest>`"
     namespace = etree.QName(root).namespace
     if draft == ATTRIBUTES_ONLY:
@@ -223,29 +125,29 @@ def _root_hint(root: etree._Element, draft: str) -> str:
         )
     elif namespace is not None:
         hint += ", in no namespace (no prefix)"
-        descendants = [e for e in _elements(root) if e is not root]
+        descendants = [e for e in all_elements(root) if e is not root]
         prefixed = [e for e in descendants if e.prefix and etree.QName(e).namespace == namespace]
         if prefixed and len(prefixed) == len(descendants):
             hint += f", and drop the `{root.prefix}:` prefix from every child element"
         elif prefixed:
-            names = sorted({_written_name(e) for e in prefixed})
+            names = sorted({written_name(e) for e in prefixed})
             hint += f", and drop the `{root.prefix}:` prefix from " + ", ".join(f"`<{n}>`" for n in names)
     return hint
 
 
 def _enable_hint(root: etree._Element) -> str | None:
-    parameter = _children(root, "EnableDAEParameter")
-    legacy = _children(root, "EnableDAE")
+    parameter = children_named(root, "EnableDAEParameter")
+    legacy = children_named(root, "EnableDAE")
     attribute = root.get("enableDAEModeVariable")
     parts: list[str] = []
     if legacy:
         element = legacy[0]
         vr = element.get("valueReference", "…")
         rename = (
-            f"rename `<{_written_name(element)}>` to `<EnableDAEParameter>` "
+            f"rename `<{written_name(element)}>` to `<EnableDAEParameter>` "
             f"(`<EnableDAEParameter valueReference=\"{vr}\"/>`)"
         )
-        first = _first_child(root)
+        first = first_child(root)
         if first is not None and first is not element:
             rename += " and make it the root's first child"
         parts.append(rename)
@@ -276,8 +178,8 @@ def _enable_hint(root: etree._Element) -> str | None:
 def _nominal_hint(root: etree._Element) -> str | None:
     found = [
         (v.get("valueReference", "?"), v.get("nominal", ""))
-        for block in _children(root, "AlgebraicVariables")
-        for v in _children(block, "AlgebraicVariable")
+        for block in children_named(root, "AlgebraicVariables")
+        for v in children_named(block, "AlgebraicVariable")
         if v.get("nominal") is not None
     ]
     if not found:
@@ -292,8 +194,8 @@ def _nominal_hint(root: etree._Element) -> str | None:
 def _formulation_hints(root: etree._Element) -> list[str]:
     hints: list[str] = []
     flatten: list[etree._Element] = []
-    for residual in _residuals(root):
-        formulations = _children(residual, "Formulation")
+    for residual in residual_elements(root):
+        formulations = children_named(residual, "Formulation")
         if len(formulations) == 1:
             flatten.append(formulations[0])
         elif len(formulations) > 1:
@@ -330,7 +232,7 @@ def _flatten_hint(formulation: etree._Element) -> str:
 
 
 def _flat_index_hint(root: etree._Element) -> str | None:
-    indexed = [r for r in _residuals(root) if r.get("index") is not None]
+    indexed = [r for r in residual_elements(root) if r.get("index") is not None]
     if not indexed:
         return None
     vrs = _listing([r.get("valueReference", "?") for r in indexed])
@@ -340,8 +242,8 @@ def _flat_index_hint(root: etree._Element) -> str | None:
 def _order_hint(root: etree._Element) -> str | None:
     kinds = [
         etree.QName(child).localname
-        for structure in _children(root, "ModelStructure")
-        for child in _element_children(structure)
+        for structure in children_named(root, "ModelStructure")
+        for child in element_children(structure)
         if etree.QName(child).localname in MODEL_STRUCTURE_ORDER
     ]
     rank = {kind: i for i, kind in enumerate(MODEL_STRUCTURE_ORDER)}
@@ -383,32 +285,6 @@ def _header_hints(root: etree._Element) -> list[str]:
 
 # --------------------------------------------------------------------------------------------
 # Small helpers
-
-
-def _element_children(element: etree._Element) -> list[etree._Element]:
-    return [c for c in element if isinstance(c.tag, str)]
-
-
-def _children(element: etree._Element, local: str) -> list[etree._Element]:
-    return [c for c in _element_children(element) if etree.QName(c).localname == local]
-
-
-def _first_child(element: etree._Element) -> etree._Element | None:
-    children = _element_children(element)
-    return children[0] if children else None
-
-
-def _elements(root: etree._Element) -> Iterator[etree._Element]:
-    return (e for e in root.iter() if isinstance(e.tag, str))
-
-
-def _residuals(root: etree._Element) -> list[etree._Element]:
-    return [r for s in _children(root, "ModelStructure") for r in _children(s, "Residual")]
-
-
-def _written_name(element: etree._Element) -> str:
-    local = etree.QName(element).localname
-    return f"{element.prefix}:{local}" if element.prefix else local
 
 
 def _listing(items: Sequence[str]) -> str:

@@ -3,8 +3,8 @@
 The ModelStructure of modelDescription.xml must resolve (DAE510) and list exactly the outputs,
 state derivatives and initial unknowns that the variables call for (DAE511-DAE513); a DAE FMU
 should also provide directional derivatives (DAE514). Each check is one linear pass over the
-ModelStructure, reusing the per-model analysis of :mod:`.core`. Unresolved value references are
-reported only by ``model-structure-unknown-vr``; the other rules skip them.
+ModelStructure, reusing the per-model analysis of :mod:`.model_analysis`. Unresolved value
+references are reported only by ``model-structure-unknown-vr``; the other rules skip them.
 """
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ from collections.abc import Iterator
 from ..context import Check, CheckContext
 from ..findings import Location, Violation, evidence
 from ..model import ModelDescription, Unknown, Variable
-from .core import analyse, unknown_loc, var_loc
+from .model_analysis import analyse, unknown_loc, var_loc
 
 
 def _unknown_subject(model: ModelDescription, u: Unknown) -> str:

@@ -18,7 +18,7 @@ from hypothesis import strategies as st
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import structural_rank as scipy_structural_rank
 
-from conformance.structure import (
+from conformance.matching import (
     BipartitePattern,
     dulmage_mendelsohn,
     maximum_matching,

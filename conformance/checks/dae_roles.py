@@ -1,0 +1,63 @@
+"""What each variable is in DAE mode, for the rules on the manifest's ModelStructure.
+
+The dependency rules (:mod:`.manifest_dependencies`) and the list rules (:mod:`.manifest_lists`)
+both classify variables by their DAE-mode role and name it in their messages.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from ..manifest import Manifest
+from ..model import ModelDescription, Variable
+
+
+@dataclass(frozen=True)
+class DaeRoles:
+    """What each variable is in DAE mode, by value reference.
+
+    States and derivatives come from the manifest's ContinuousStateDerivative list, or from the
+    modelDescription's when the manifest lists none (an absent list is inherited, Q-02).
+    """
+
+    algebraic: frozenset[int]
+    states: frozenset[int]
+    derivatives: frozenset[int]
+    residuals: frozenset[int]
+
+    @classmethod
+    def of(cls, model: ModelDescription, manifest: Manifest) -> DaeRoles:
+        csd = manifest.unknowns("ContinuousStateDerivative") or \
+            tuple(model.unknowns("ContinuousStateDerivative"))
+        derivatives = {u.vr for u in csd if u.vr is not None}
+        states = set()
+        for vr in derivatives:
+            var = model.by_vr.get(vr)
+            if var is not None and var.derivative is not None:
+                states.add(var.derivative)
+        return cls(
+            algebraic=frozenset(a.vr for a in manifest.algebraic if a.vr is not None),
+            states=frozenset(states), derivatives=frozenset(derivatives),
+            residuals=frozenset(u.vr for u in manifest.residuals if u.vr is not None))
+
+
+def describe(var: Variable, roles: DaeRoles) -> str:
+    """A short noun phrase for what ``var`` is ("a local variable", "a state derivative", ...)."""
+    vr = var.vr
+    if vr in roles.algebraic:
+        return "an algebraic variable"
+    if vr in roles.residuals:
+        return "a residual"
+    if vr in roles.states:
+        return "a continuous state"
+    if vr in roles.derivatives:
+        return "a continuous state derivative"
+    if var.variability == "constant":
+        return "a constant"
+    return {
+        "structuralParameter": "a structural parameter",
+        "calculatedParameter": "a calculated parameter",
+        "parameter": "a parameter",
+        "input": "an input",
+        "output": "an output",
+        "independent": "the independent variable",
+    }.get(var.causality, "a local variable")

@@ -1,0 +1,187 @@
+"""Static checks: the dependencies in the manifest's DAE-mode ModelStructure (DAE420-DAE423).
+
+In DAE mode the manifest ``<ModelStructure>`` replaces the modelDescription's (DAE-30). These
+rules check its ``dependencies`` against the knowns each element kind may have (DAE-34, MS-10,
+MS-11) and its ``dependenciesKind`` (MS-30, MS-31); its Output, ContinuousStateDerivative and
+InitialUnknown lists are :mod:`.manifest_lists`'s. Residual basics (DAE401-DAE419) live
+elsewhere. A dependency that names no variable is reported only by dependency-unknown-vr; the
+other rules skip it.
+"""
+from __future__ import annotations
+
+import logging
+from typing import Iterator
+
+from ..context import Check, CheckContext
+from ..drafts.detect import FORMULATION, LS_DAE_ROOT
+from ..findings import Location, Violation, evidence
+from ..model import ModelDescription, Unknown, Variable
+from .dae_roles import DaeRoles, describe
+
+log = logging.getLogger(__name__)
+
+KINDS = ("dependent", "constant", "fixed", "tunable", "discrete")
+INITIAL_KINDS = ("dependent", "constant")
+# Drafts whose residuals are fully implicit F(der(x), x, w, t): state derivatives are knowns (D-06).
+IMPLICIT_DRAFTS = (FORMULATION, LS_DAE_ROOT)
+
+_CT_KNOWNS = ("inputs, continuous states, parameters, algebraic variables and the independent "
+              "variable")
+_IMPLICIT_KNOWNS = ("inputs, continuous states, continuous state derivatives, parameters, "
+                    "algebraic variables and the independent variable")
+_INIT_KNOWNS = ("inputs, variables with initial=\"exact\", algebraic variables and the "
+                "independent variable")
+_CHECKED_KINDS = ("Output", "ContinuousStateDerivative", "InitialUnknown", "Residual")
+
+
+def unknown_name(u: Unknown, model: ModelDescription) -> str:
+    """The variable name of a structure element, or its value reference if it names none."""
+    var = model.by_vr.get(u.vr) if u.vr is not None else None
+    if var is not None:
+        return var.name
+    return f"valueReference {u.vr}" if u.vr is not None else u.path
+
+
+def _loc(u: Unknown) -> Location:
+    return Location(file=u.file, line=u.line, path=u.path)
+
+
+def _tag(u: Unknown) -> str:
+    return "<Formulation>" if u.formulations else f"<{u.kind}>"
+
+
+# --- dependency-unknown-vr ------------------------------------------------------------------
+
+def dependency_unknown_vr(ctx: CheckContext) -> Iterator[Violation]:
+    """Every manifest ModelStructure ``dependencies`` entry names a variable (MV-03, DAE-35)."""
+    model, manifest = ctx.model, ctx.manifest
+    assert model is not None and manifest is not None
+    # Tokens that are not unsigned integers are left to the schema stage: fmi3Unknown types
+    # dependencies as a list of xs:unsignedInt in every draft's schema.
+    by_vr = model.by_vr
+    for u in manifest.structure:
+        deps = u.dependencies
+        if not deps or all(vr in by_vr for vr in deps):
+            continue
+        for vr in dict.fromkeys(deps):
+            if vr not in by_vr:
+                yield Violation(
+                    f"the dependencies of {_tag(u)} {{subject}} list valueReference {vr}, which "
+                    "names no variable in modelDescription.xml",
+                    _loc(u), evidence(element=u.kind, value_reference=vr),
+                    subject=unknown_name(u, model))
+
+
+# --- dependency-not-allowed-known ------------------------------------------------------------
+
+def _allowed(kind: str, var: Variable, roles: DaeRoles, draft: str | None) -> bool:
+    vr = var.vr
+    if vr in roles.algebraic or var.causality in ("input", "independent"):
+        return True
+    if kind == "InitialUnknown":
+        return var.initial == "exact"
+    if var.causality == "parameter" or vr in roles.states:
+        return True
+    return kind == "Residual" and draft in IMPLICIT_DRAFTS and vr in roles.derivatives
+
+
+def _allowed_text(kind: str, draft: str | None) -> str:
+    if kind == "InitialUnknown":
+        return _INIT_KNOWNS
+    if kind == "Residual" and draft in IMPLICIT_DRAFTS:
+        return _IMPLICIT_KNOWNS
+    return _CT_KNOWNS
+
+
+def dependency_not_allowed_known(ctx: CheckContext) -> Iterator[Violation]:
+    """Each dependency is a known the element kind may have (DAE-34, MS-10, MS-11, D-06)."""
+    model, manifest = ctx.model, ctx.manifest
+    assert model is not None and manifest is not None
+    roles = DaeRoles.of(model, manifest)
+    verdicts: dict[tuple[str, int], bool] = {}  # (element kind, known) -> allowed; few distinct
+    for u in manifest.structure:
+        if u.kind not in _CHECKED_KINDS:
+            continue  # EventIndicator/ClockedState dependencies are for debugging (MS-12)
+        for vr in dict.fromkeys(u.dependencies or ()):
+            key = (u.kind, vr)
+            ok = verdicts.get(key)
+            if ok is None:
+                known = model.by_vr.get(vr)
+                ok = verdicts[key] = known is None or _allowed(u.kind, known, roles, ctx.draft)
+            if ok:
+                continue
+            known = model.by_vr[vr]
+            what = describe(known, roles)
+            if u.kind == "InitialUnknown" and known.initial is not None:
+                what += f' with initial="{known.initial}"'
+            allowed = _allowed_text(u.kind, ctx.draft)
+            yield Violation(
+                f"{_tag(u)} {{subject}} depends on '{known.name}', {what}; its allowed knowns "
+                f"are {allowed}",
+                _loc(u), evidence(element=u.kind, known=known.name, known_value_reference=vr,
+                                  known_is=what, allowed=allowed),
+                subject=unknown_name(u, model))
+
+
+# --- dependencies-kind-length / dependencies-kind-invalid ------------------------------------
+
+_ALWAYS_ALLOWED = frozenset({"dependent"})
+_KIND_SET = frozenset(KINDS)
+
+def dependencies_kind_length(ctx: CheckContext) -> Iterator[Violation]:
+    """``dependenciesKind`` has one entry per ``dependencies`` entry (MS-30)."""
+    model, manifest = ctx.model, ctx.manifest
+    assert model is not None and manifest is not None
+    for u in manifest.structure:
+        if u.dependencies_kind is None:
+            continue
+        name = unknown_name(u, model)
+        if u.dependencies is None:
+            yield Violation(
+                f"{_tag(u)} {{subject}} has dependenciesKind but no dependencies attribute; "
+                "remove dependenciesKind or list the dependencies it describes",
+                _loc(u), evidence(element=u.kind, kinds=len(u.dependencies_kind)), subject=name)
+            continue
+        n_deps = len(u.dependencies) + len(u.bad_tokens)
+        if n_deps != len(u.dependencies_kind):
+            yield Violation(
+                f"{_tag(u)} {{subject}} has {len(u.dependencies_kind)} dependenciesKind entries "
+                f"for {n_deps} dependencies; give exactly one kind per dependency",
+                _loc(u), evidence(element=u.kind, dependencies=n_deps,
+                                  kinds=len(u.dependencies_kind)), subject=name)
+
+
+def dependencies_kind_invalid(ctx: CheckContext) -> Iterator[Violation]:
+    """Each ``dependenciesKind`` value exists and is allowed for its unknown (MS-31)."""
+    model, manifest = ctx.model, ctx.manifest
+    assert model is not None and manifest is not None
+    for u in manifest.structure:
+        if not u.dependencies_kind:
+            continue
+        var = model.by_vr.get(u.vr) if u.vr is not None else None
+        kinds = set(u.dependencies_kind)
+        if kinds <= _ALWAYS_ALLOWED or (u.kind != "InitialUnknown" and kinds <= _KIND_SET
+                                        and (var is None or var.is_float)):
+            continue  # the common case: nothing to report, decided without a loop
+        name = unknown_name(u, model)
+        for kind in dict.fromkeys(u.dependencies_kind):
+            if kind not in KINDS:
+                continue  # the schema stage reports it: fmi3Unknown enumerates the kinds
+            if var is not None and not var.is_float and kind != "dependent":
+                yield Violation(
+                    f"{_tag(u)} {{subject}} is a <{var.type}> and uses dependenciesKind "
+                    f"'{kind}'; a non-floating-point unknown allows only 'dependent'",
+                    _loc(u), evidence(element=u.kind, kind=kind, type=var.type), subject=name)
+            elif u.kind == "InitialUnknown" and kind not in INITIAL_KINDS:
+                yield Violation(
+                    f"<InitialUnknown> {{subject}} uses dependenciesKind '{kind}'; an initial "
+                    "unknown allows only 'dependent' or 'constant'",
+                    _loc(u), evidence(element=u.kind, kind=kind), subject=name)
+
+
+CHECKS: dict[str, Check] = {
+    "DAE420": dependency_unknown_vr,
+    "DAE421": dependency_not_allowed_known,
+    "DAE422": dependencies_kind_length,
+    "DAE423": dependencies_kind_invalid,
+}

@@ -1,0 +1,1 @@
+"""fmi-ls-dae manifest drafts: recognition in :mod:`.detect`, migration hints in :mod:`.migrate`."""

@@ -7,6 +7,7 @@ every option must be a parameter, and none may have a default.
 """
 from __future__ import annotations
 
+import dataclasses
 import inspect
 import warnings
 from typing import Any, Callable, Iterable
@@ -15,6 +16,9 @@ import pytest
 
 from conformance.catalogue import default_catalogue
 from conformance.checks import REGISTRY
+from conformance.numerics.settings import Settings
+from conformance.probes.registry import PROBES
+from conformance.probes.runner import RUNNER_RULES, Limits
 
 #: What :func:`_defaults_in` reports for an option that is not a parameter of the function.
 NOT_A_PARAMETER = "not a parameter"
@@ -23,10 +27,10 @@ ONLY_IN_KWARGS = "only in **kwargs"
 
 
 def _registered() -> list[tuple[str, Callable[..., Any]]]:
-    """(code, function) of every registered rule that has options in the catalogue."""
-    # The probe registry, conformance.probes.registry.PROBES, is to be added here as well.
+    """(code, function) of every registered static check and probe that has options in the
+    catalogue."""
     catalogue = default_catalogue()
-    return [(code, function) for code, function in sorted(REGISTRY.items())
+    return [(code, function) for code, function in sorted({**REGISTRY, **PROBES}.items())
             if catalogue[code].options]
 
 
@@ -68,3 +72,20 @@ def test_option_defaults_are_only_in_the_catalogue(code: str, function: Callable
             problems.append(f"{where} gives the option {name!r} the default {default!r}; the "
                             f"catalogue's is {options[name]!r}: remove the one in the code")
     assert not problems, "\n".join(problems)
+
+
+@pytest.mark.parametrize("holder, rules", [
+    (Settings, ("simulation-failed",)),   # the options of every simulation rule
+    (Limits, RUNNER_RULES),               # the runner's time, memory and restart limits
+], ids=["Settings", "Limits"])
+def test_option_holders_have_no_defaults_of_their_own(holder: type, rules: tuple[str, ...]
+                                                      ) -> None:
+    """Dataclasses built from catalogue options carry no second copy of their defaults."""
+    catalogue = default_catalogue()
+    options = {k: v for name in rules for k, v in catalogue[name].option_values.items()}
+    fields = {f.name: f for f in dataclasses.fields(holder)}
+    assert set(options) <= set(fields), f"options {set(options) - set(fields)} reach no field"
+    copies = [f"{holder.__name__}.{name} = {fields[name].default!r} (catalogue {value!r})"
+              for name, value in options.items()
+              if fields[name].default is not dataclasses.MISSING]
+    assert not copies, "defaults written twice: " + "; ".join(copies)

@@ -1,4 +1,4 @@
-"""DAE mode with SUNDIALS IDA: consistent initialisation, the residual, the FMU's Jacobian.
+"""DAE mode with SUNDIALS IDA: the residual, the FMU's Jacobian (initialisation: consistent.py).
 
 The unknowns of IDA are ``y = [x; w]`` (states, then algebraic variables) and the residual is
 
@@ -22,38 +22,15 @@ from __future__ import annotations
 
 import logging
 from dataclasses import dataclass, field
-from typing import Any, Protocol, Sequence
+from typing import Any
 
 import numpy as np
 
+from .consistent import DaeSystem, consistent_start
 from .limits import Budget, EvaluationFailed, Stepper, Stop, blame_failures, scaled_condition
 from .settings import BUDGET, FMU_FAILED, INIT, OK, SINGULAR, SOLVER, Settings, Trajectory
 
 log = logging.getLogger(__name__)
-
-NEWTON_ITERATIONS = 50
-NEWTON_STEP = 1e-3   # converged when the correction is below this fraction of the tolerance
-ROUNDING = 1e3 * float(np.finfo(float).eps)  # ... or the residuals at rounding level, times S_i
-
-
-class DaeSystem(Protocol):
-    """A semi-explicit index-1 DAE ``x' = f(t, x, w), 0 = g(t, x, w)`` with ``y = [x; w]``."""
-
-    nx: int
-    nw: int
-    names: Sequence[str]
-    nominal: np.ndarray          # (nx + nw,)
-    jacobian_source: str
-    fmi_calls: int
-
-    def evaluate(self, t: float, y: np.ndarray) -> np.ndarray:
-        """``[f; g]`` at (t, y), shape (nx + nw,); raises EvaluationFailed."""
-        ...
-
-    def partials(self, t: float, y: np.ndarray) -> np.ndarray:
-        """``d[f; g]/d[x; w]`` at (t, y), shape (nx + nw, nx + nw); raises EvaluationFailed."""
-        ...
-
 
 @dataclass
 class _Run:
@@ -68,76 +45,6 @@ class _Run:
     last_jacobian: np.ndarray | None = None
     max_condition: float = 0.0
     max_condition_t: float | None = None
-
-
-def _scales(system: DaeSystem, jac: np.ndarray) -> np.ndarray:
-    """S_i = sum_j |dg_i/dv_j| * nominal_j: the size of each residual's sensitivity, (nw,)."""
-    return np.abs(jac[system.nx:, :] * system.nominal[None, :]).sum(axis=1)
-
-
-def _residual_summary(g: np.ndarray, scales: np.ndarray) -> dict[str, float | None]:
-    if g.size == 0:
-        return {"max_abs": 0.0, "max_scaled": 0.0}
-    finite = bool(np.all(np.isfinite(g)))
-    scaled = np.abs(g) / np.where(scales > 0, scales, 1.0)
-    return {"max_abs": float(np.max(np.abs(g))) if finite else None,
-            "max_scaled": float(np.max(scaled)) if finite else None}
-
-
-def consistent_start(system: DaeSystem, t0: float, y0: np.ndarray, atol: np.ndarray,
-                     rtol: float) -> tuple[np.ndarray, dict[str, Any]]:
-    """Solve g(t0, x0, w) = 0 for w by damped Newton with the system's dg/dw, from ``y0``.
-
-    Returns the consistent ``y`` and a summary: the residual before and after (largest absolute
-    value, and largest relative to the residual's sensitivity S_i), the iterations, whether the
-    correction came below ``NEWTON_STEP`` times the integration tolerance. Raises Stop(INIT)
-    when no consistent point is found, EvaluationFailed when the system cannot be evaluated.
-    """
-    nx, y = system.nx, np.array(y0, dtype=float)
-    g = system.evaluate(t0, y)[nx:]
-    jac = system.partials(t0, y)
-    before = _residual_summary(g, _scales(system, jac))
-    info: dict[str, Any] = {"residual_before": before, "iterations": 0}
-    if system.nw == 0:
-        info.update(residual_after=before, converged=True)
-        return y, info
-    if not np.all(np.isfinite(g)):
-        raise Stop(INIT, "the residuals are not finite at the FMU's initial point", t0, **info)
-    converged = False
-    for it in range(1, NEWTON_ITERATIONS + 1):
-        scales = np.maximum(_scales(system, jac), 1e-300)
-        if np.all(np.abs(g) <= ROUNDING * scales):
-            converged = True  # zero up to rounding: a further step would only add noise
-            break
-        try:
-            dw = np.linalg.solve(jac[nx:, nx:], -g)
-        except np.linalg.LinAlgError:
-            raise Stop(SINGULAR, "dg/dw is singular at the initial point: Newton cannot "
-                       "correct the algebraic variables", t0, **info) from None
-        size = np.max(np.abs(g) / scales)
-        lam = 1.0
-        while True:  # backtracking on the scaled residual
-            trial = y.copy()
-            trial[nx:] += lam * dw
-            g_trial = system.evaluate(t0, trial)[nx:]
-            better = np.max(np.abs(g_trial) / scales) <= (1 - 1e-4 * lam) * size
-            if (np.all(np.isfinite(g_trial)) and better) or lam < 1e-4:
-                break
-            lam /= 2
-        y, g = trial, g_trial
-        info["iterations"] = it
-        if not np.all(np.isfinite(g)):
-            break
-        jac = system.partials(t0, y)
-        tol = atol[nx:] + rtol * np.abs(y[nx:])
-        if np.max(np.abs(lam * dw) / tol) <= NEWTON_STEP:
-            converged = True
-            break
-    info.update(residual_after=_residual_summary(g, _scales(system, jac)), converged=converged)
-    if not converged:
-        raise Stop(INIT, f"Newton's method did not find consistent algebraic variables in "
-                   f"{info['iterations']} iterations", t0, **info)
-    return y, info
 
 
 def _initial_slope(system: DaeSystem, t0: float, y: np.ndarray) -> np.ndarray:

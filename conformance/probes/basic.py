@@ -155,7 +155,8 @@ def initial_residual_nonzero(ctx: ProbeContext, *, rtol: float, atol: float) -> 
 # ---------------------------------------------------------------- evaluation-not-repeatable
 
 
-def evaluation_not_repeatable(ctx: ProbeContext, *, rtol: float, atol: float) -> Iterator[Violation]:
+def evaluation_not_repeatable(ctx: ProbeContext, *, rtol: float, atol: float
+                              ) -> Iterator[Violation]:
     """The same (t, x, w, u) gives the same residuals, derivatives and outputs whatever was
     evaluated before: points A, B, C evaluated as A B A A C B A, and A, B on a fresh instance."""
     dae = dae_of(ctx)

@@ -20,17 +20,24 @@ error estimate (:mod:`conformance.numerics.numdiff`) plus ``rtol * S_i / nominal
 from __future__ import annotations
 
 import logging
-from dataclasses import dataclass
 from typing import Iterator
 
 import numpy as np
 
 from ..findings import Violation, evidence
 from .api import FmiError, ProbeContext, ProbeSkipped
+from .entry_comparison import (
+    Worst,
+    call_failures,
+    closest_entries,
+    entry_errors,
+    entry_violations,
+    keep_worst,
+    mismatched_entries,
+)
 from .jacobian import (
     FACT,
     JacobianLayout,
-    PointSurvey,
     Settings,
     Survey,
     build_layout,
@@ -48,111 +55,6 @@ __all__ = ["FACT", "PROBES", "JacobianLayout", "Settings", "Survey", "build_layo
 log = logging.getLogger(__name__)
 
 
-# ------------------------------------------------------------------------ comparing entries
-
-@dataclass
-class _Worst:
-    """The worst point of one entry: the excess ratio and what to show as evidence."""
-
-    ratio: float
-    ps: PointSurvey
-    items: dict
-
-
-
-def _keep_worst(worst: dict, key, ratio: float, ps: PointSurvey, items: dict) -> None:
-    if key not in worst or ratio > worst[key].ratio:
-        worst[key] = _Worst(ratio, ps, items)
-
-
-def _compared(layout: JacobianLayout, e, which: str, *, rtol: float, margin: float,
-              ulps: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """The FMU's values, |FMU - FD|, the tolerance, the FD error estimate and the scale of
-    every measured entry at one point (each of shape (nnz,))."""
-    fmu = e.dd if which == "dd" else e.adj
-    scale = row_scale(layout, e)[e.rows] / layout.nominal[e.cols]
-    err = e.error(ulps)
-    return fmu, np.abs(fmu - e.fd), margin * err + rtol * scale, err, scale
-
-
-def _closest(s: Survey, which: str, *, rtol: float, margin: float, ulps: float,
-             limit: int = 20) -> list[tuple[str, float, float]]:
-    """The entries that came closest to their tolerance (the report plots error against
-    tolerance for passing checks too): (entry, |FMU - FD|, tolerance), worst first."""
-    layout = s.layout
-    assert layout is not None
-    best: dict[tuple[int, int], tuple[float, float, float]] = {}
-    for ps in s.points:
-        e = ps.entries
-        if (e.dd if which == "dd" else e.adj) is None:
-            continue
-        fmu, diff, tol, _, _ = _compared(layout, e, which, rtol=rtol, margin=margin, ulps=ulps)
-        ok = np.isfinite(diff) & (tol > 0)
-        for k in np.flatnonzero(ok):
-            key = (int(e.rows[k]), int(e.cols[k]))
-            ratio = float(diff[k] / tol[k])
-            if key not in best or ratio > best[key][0]:
-                best[key] = (ratio, float(diff[k]), float(tol[k]))
-    ranked = sorted(best.items(), key=lambda kv: -kv[1][0])[:limit]
-    return [(layout.entry(i, j), d, t) for (i, j), (_, d, t) in ranked]
-
-
-def _mismatches(s: Survey, which: str, *, rtol: float, margin: float, ulps: float) -> dict:
-    """Entries where the FMU's value (``dd`` or ``adj``) and the finite difference disagree."""
-    layout = s.layout
-    assert layout is not None
-    worst: dict[tuple[int, int], _Worst] = {}
-    for ps in s.points:
-        e = ps.entries
-        fmu, diff, tol, err, scale = _compared(layout, e, which, rtol=rtol, margin=margin,
-                                               ulps=ulps)
-        bad = np.isfinite(fmu) & np.isfinite(e.fd) & (diff > tol)  # non-finite: nan-or-inf
-        if which == "adj":
-            # An adjoint that equals a wrong directional derivative is the same fault, reported
-            # once by directional-derivative-mismatch: here only what is the adjoint's own.
-            shared = np.abs(e.adj - e.dd) <= rtol * scale + margin * err
-            bad &= ~(shared & (np.abs(e.dd - e.fd) > tol))
-        for k in np.flatnonzero(bad):
-            _keep_worst(worst, (int(e.rows[k]), int(e.cols[k])),
-                        float(diff[k] / tol[k]) if tol[k] > 0 else np.inf, ps,
-                        {"fmu": float(fmu[k]), "finite_difference": float(e.fd[k]),
-                         "error_estimate": float(err[k]), "tolerance": float(tol[k]),
-                         "row_scale": float(scale[k] * layout.nominal[e.cols[k]]),
-                         "declared": bool(e.declared[k])})
-    return worst
-
-
-def _entry_violations(s: Survey, worst: dict, message: str) -> Iterator[Violation]:
-    layout = s.layout
-    assert layout is not None
-    for (i, j), w in sorted(worst.items()):
-        yield Violation(message, layout.rows[i].location, evidence(
-            entry=layout.entry(i, j), unknown=layout.rows[i].name, known=layout.cols[j].name,
-            **w.items, scale="row scale S_i = sum_j |J_ij| * nominal_j; tolerance = margin * "
-            "error_estimate + rtol * S_i / nominal_j", point=point_evidence(layout, w.ps)),
-            subject=layout.entry(i, j))
-
-
-def _errors(worst: dict, layout: JacobianLayout) -> list[tuple[str, float, float]]:
-    return [(layout.entry(i, j), abs(w.items.get("fmu", 0.0) - w.items["finite_difference"]),
-             w.items["tolerance"]) for (i, j), w in worst.items()]
-
-
-def _failures(s: Survey, call: str) -> Iterator[Violation]:
-    """The first refusal of the FMU's derivative function, if any (one finding, not one per
-    point)."""
-    for flag, point, exc in s.failures:
-        if flag != call:
-            continue
-        fn = "fmi3GetDirectionalDerivative" if call == "directional" else "fmi3GetAdjointDerivative"
-        yield Violation(
-            f"{fn} fails in DAE mode with residuals, derivatives and outputs as unknowns and "
-            "states, algebraic variables and inputs as knowns (fmi-ls-dae allows both)",
-            evidence=evidence(call=exc.call, status=exc.status, log=list(exc.log)[:10],
-                              point=point.label))
-        return
-
-
 # ------------------------------------------------------------------------------- the probes
 
 def _against_fd(ctx: ProbeContext, s: Survey, which: str, code: str, *, rtol: float,
@@ -160,13 +62,13 @@ def _against_fd(ctx: ProbeContext, s: Survey, which: str, code: str, *, rtol: fl
     """The steps both derivative probes share: the FMU's refusals, the entries finite
     differences do not confirm (recorded for the report's error plot), and their findings."""
     call, fmi = _CALLS[which]
-    failures = list(_failures(s, call))
+    failures = list(call_failures(s, call))
     if not getattr(s, call) and not failures:
         raise ProbeSkipped(f"the FMU does not provide {call} derivatives")
-    worst = _mismatches(s, which, rtol=rtol, margin=margin, ulps=ulps)
-    record_errors(ctx, code, _errors(worst, s.layout)
-                  or _closest(s, which, rtol=rtol, margin=margin, ulps=ulps))
-    found = list(_entry_violations(
+    worst = mismatched_entries(s, which, rtol=rtol, margin=margin, ulps=ulps)
+    record_errors(ctx, code, entry_errors(worst, s.layout)
+                  or closest_entries(s, which, rtol=rtol, margin=margin, ulps=ulps))
+    found = list(entry_violations(
         s, worst, f"{fmi} gives {{subject}} that finite differences of the function do not "
         "confirm"))
     return failures + found, worst
@@ -194,7 +96,7 @@ def adjoint_derivative_mismatch(ctx: ProbeContext, *, rtol: float, margin: float
     if worst:
         return
     # judged with this rule's tolerances: a probe sees only its own options
-    directional_ok = not _mismatches(s, "dd", rtol=rtol, margin=margin, ulps=ulps)
+    directional_ok = not mismatched_entries(s, "dd", rtol=rtol, margin=margin, ulps=ulps)
     for ps in s.points:
         if ps.entries.dot is None or not directional_ok:
             continue
@@ -215,7 +117,7 @@ def dependency_undeclared(ctx: ProbeContext, *, rtol: float, margin: float,
     s = surveyed(ctx)
     layout = s.layout
     assert layout is not None
-    worst: dict[tuple[int, int], _Worst] = {}
+    worst: dict[tuple[int, int], Worst] = {}
     for ps in s.points:
         e = ps.entries
         scale = row_scale(layout, e, declared_only=True)[e.rows]
@@ -227,7 +129,7 @@ def dependency_undeclared(ctx: ProbeContext, *, rtol: float, margin: float,
         for k in np.flatnonzero(clear):
             if not layout.rows[e.rows[k]].explicit:
                 continue
-            _keep_worst(worst, (int(e.rows[k]), int(e.cols[k])),
+            keep_worst(worst, (int(e.rows[k]), int(e.cols[k])),
                         float(size[k] / tol[k]) if tol[k] > 0 else np.inf, ps,
                         {"finite_difference": float(e.fd[k]), "error_estimate": float(err[k]),
                          "tolerance": float(tol[k] / nominal[k]),

@@ -98,7 +98,8 @@ def _condition_violation(s: Survey, found: tuple, message: str, **extra) -> Viol
         point=point_evidence(layout, ps)))
 
 
-def algebraic_jacobian_ill_conditioned(ctx: ProbeContext, *, max_condition: float) -> Iterator[Violation]:
+def algebraic_jacobian_ill_conditioned(ctx: ProbeContext, *, max_condition: float
+                                       ) -> Iterator[Violation]:
     """The scaled dg/dw has a condition number above ``max_condition`` (but is not singular)."""
     s = _algebraic_survey(ctx)
     found = _worst_condition(s, singular=False)

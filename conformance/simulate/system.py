@@ -83,7 +83,7 @@ class _Coloured:
 
 
 class FmuDae:
-    """``F = [f; g]`` of an instance in DAE mode, with ``y = [x; w]`` (see dae.DaeSystem)."""
+    """``F = [f; g]`` of an instance in DAE mode, with ``y = [x; w]`` (see numerics.consistent.DaeSystem)."""
 
     def __init__(self, inst, layout, manifest, *, use_directional: bool = True):
         self.inst, self.layout = inst, layout

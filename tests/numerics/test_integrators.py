@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from conformance.numerics import settings as st
-from conformance.numerics.dae import consistent_start, integrate_dae
+from conformance.numerics.consistent import consistent_start
+from conformance.numerics.dae import integrate_dae
 from conformance.numerics.limits import EvaluationFailed
 from conformance.numerics.ode import integrate_ode
 from tests.simkit import sim_settings

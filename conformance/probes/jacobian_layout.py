@@ -11,6 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..attributes import declared_nominal, usable_bounds, usable_nominal
 from ..findings import Location
 from ..model import ModelDescription, Unknown, Variable
 from ..numerics import colouring as col
@@ -59,23 +60,14 @@ class JacobianLayout:
         return np.array([k for k, it in enumerate(items) if it.role == role], dtype=np.intp)
 
 
-def _float(text: str | None, default: float) -> float:
-    try:
-        return float(text) if text is not None else default
-    except ValueError:
-        return default
-
-
 def _scalar_float(model: ModelDescription, vr: int | None) -> Variable | None:
     var = model.by_vr.get(vr) if vr is not None else None
     return var if var is not None and var.is_float and not var.dimensions else None
 
 
 def _column(var: Variable, role: str) -> Column:
-    nominal = abs(_float(var.nominal, 1.0))
-    nominal = nominal if np.isfinite(nominal) and nominal > 0 else 1.0
-    return Column(var.vr, var.name, role, nominal, _float(var.minimum, -np.inf),
-                  _float(var.maximum, np.inf))
+    lower, upper = usable_bounds(var.minimum, var.maximum)
+    return Column(var.vr, var.name, role, usable_nominal(var.nominal), lower, upper)
 
 
 def build_layout(ctx: ProbeContext) -> tuple[JacobianLayout | None, str]:
@@ -122,10 +114,9 @@ def _rows(model: ModelDescription, manifest, knowns: set[int]) -> list[tuple[Row
                 continue
             taken.add(var.vr)
             claim = u.dependencies is not None and not inherited
-            nominal = abs(_float(var.nominal, np.nan))
             out.append((Row(var.vr, var.name, role, claim,
                             Location(file=u.file, line=u.line, path=u.path),
-                            nominal if np.isfinite(nominal) and nominal > 0 else None), u))
+                            declared_nominal(var.nominal)), u))
     return out
 
 

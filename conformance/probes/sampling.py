@@ -29,7 +29,9 @@ def start_point(inst: Instance | None, layout: Layout,
     """The initial point of ``inst`` (in Continuous-Time Mode), or the XML start values.
 
     A value the FMU reports as NaN or Inf is replaced by its XML start value (0 without one),
-    so that the other points stay usable, and noted in ``nonfinite`` for ``nan-or-inf``."""
+    so that the other points stay usable, and noted in ``nonfinite`` for ``nan-or-inf`` -- unless
+    the XML itself gives a non-finite start value (float-attribute-not-finite): the FMU's initial
+    values then follow the XML, and the fault is the static finding's, not the binary's."""
     vrs = [*layout.states_for(inst.mode if inst else "dae"),
            *(layout.algebraic if inst is None or inst.mode == "dae" else ()), *layout.inputs]
     vrs = list(dict.fromkeys(vrs))
@@ -43,7 +45,7 @@ def start_point(inst: Instance | None, layout: Layout,
     out = {}
     for vr, v, default in zip(vrs, values, fallback):
         if not math.isfinite(v):
-            if nonfinite is not None:
+            if nonfinite is not None and not layout.flagged_start:
                 nonfinite[vr] = float(v)
             v = default
         out[vr] = float(v)

@@ -4,20 +4,12 @@ model and the manifest, used by every instance of the FMU.
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 from typing import Any, Mapping, Sequence
 
+from ..attributes import start_flagged, usable_bounds, usable_nominal, usable_start
 from ..manifest import Manifest
 from ..model import FLOAT_TYPES, ModelDescription, Variable
-
-
-def _float(text: str | None, default: float) -> float:
-    try:
-        value = float(text) if text is not None else default
-    except ValueError:
-        return default
-    return value if math.isfinite(value) else default
 
 
 def _scalar_float64(var: Variable | None) -> bool:
@@ -52,6 +44,7 @@ class Layout:
     nominal: Mapping[int, float] = field(default_factory=dict)
     bounds: Mapping[int, tuple[float, float]] = field(default_factory=dict)
     start: Mapping[int, float] = field(default_factory=dict)
+    flagged_start: frozenset[int] = frozenset()   # start values the static stage flags
     ignored: tuple[str, ...] = ()
     provides_directional: bool = False
     provides_adjoint: bool = False
@@ -105,17 +98,19 @@ class Layout:
         enable, status, tunable = _enable(model, manifest)
         me = model.model_exchange
         names, nominal, bounds, start = {}, {}, {}, {}
+        flagged: set[int] = set()
         for var in model.variables:
             if var.vr is None:
                 continue
             names.setdefault(var.vr, var.name)
             if var.type in FLOAT_TYPES:
-                nom = abs(_float(var.nominal, 1.0))
-                nominal[var.vr] = nom if nom > 0 else 1.0
-                bounds[var.vr] = (_float(var.minimum, -math.inf), _float(var.maximum, math.inf))
+                # what the static stage flags (conformance.attributes) is never sampled from
+                nominal[var.vr] = usable_nominal(var.nominal)
+                bounds[var.vr] = usable_bounds(var.minimum, var.maximum)
                 if var.start is not None:
-                    start[var.vr] = _float(var.start.split()[0] if var.start.split() else None,
-                                           0.0)
+                    start[var.vr] = usable_start(var.start, 0.0)
+                    if start_flagged(var.start):
+                        flagged.add(var.vr)
         inputs = [v.vr for v in model.variables
                   if v.causality == "input" and v.variability == "continuous"]
         return cls(
@@ -127,6 +122,7 @@ class Layout:
             enable_tunable=tunable, token=model.instantiation_token or "",
             model_identifier=(me.model_identifier if me else None) or "",
             names=names, nominal=nominal, bounds=bounds, start=start,
+            flagged_start=frozenset(flagged),
             ignored=tuple(dict.fromkeys(ignored)),
             provides_directional=bool(me and me.flag("providesDirectionalDerivatives")),
             provides_adjoint=bool(me and me.flag("providesAdjointDerivatives")),

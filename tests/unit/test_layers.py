@@ -25,7 +25,7 @@ FLOORS: list[tuple[str, ...]] = [
     ("fmu", "schemas", "schema_messages", "xmlsafe", "archive_scan", "archive_base", "manifest",
      "reporters", "ruledocs", "baseline"),
     ("drafts", "catalogue", "config"),
-    ("numerics", "model", "matching", "findings", "paths", "progress", "__init__"),
+    ("numerics", "model", "matching", "findings", "paths", "progress", "attributes", "__init__"),
 ]
 
 

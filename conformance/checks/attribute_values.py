@@ -1,0 +1,63 @@
+"""Static checks: the numeric attributes of Float variables (DAE520-DAE522).
+
+A NaN or infinite ``start`` or ``nominal``, an empty range (``min = INF``, ``max = -INF``, NaN),
+a ``nominal`` of zero or below, and ``min > max`` are faults of the XML that importers inherit:
+tolerances ``atol = nominal * rtol`` become zero or negative, start values poison the first
+step. The reading is :mod:`conformance.attributes`, shared with the probes' layout, so that no
+probe samples from (or blames the binary for) a value flagged here.
+"""
+from __future__ import annotations
+
+from typing import Iterator
+
+from ..attributes import MIN_ABOVE_MAX, NOMINAL_NOT_POSITIVE, NOT_FINITE, attribute_problems
+from ..context import Check, CheckContext
+from ..findings import Violation, evidence
+from .model_analysis import var_loc
+
+_ADVICE = {
+    NOT_FINITE: "write a finite number (leave min or max out for no bound)",
+    NOMINAL_NOT_POSITIVE: "give a positive nominal (the typical magnitude of the variable) or "
+                          "leave it out (nominal 1)",
+    MIN_ABOVE_MAX: "no value lies in the range: swap or correct the bounds",
+}
+
+
+def _violations(ctx: CheckContext, rule: str) -> Iterator[Violation]:
+    if (model := ctx.model) is None:
+        return
+    for var in model.variables:
+        if not var.is_float or (var.start is None and var.nominal is None
+                                and var.minimum is None and var.maximum is None):
+            continue
+        for problem in attribute_problems(var.start, var.nominal, var.minimum, var.maximum):
+            if problem.rule != rule:
+                continue
+            shown = "min > max" if rule == MIN_ABOVE_MAX else problem.attribute
+            yield Violation(
+                f"{{subject}}: {shown} = {problem.text!r}; {_ADVICE[rule]}",
+                var_loc(model, var),
+                evidence(attribute=problem.attribute, value=problem.text, type=var.type),
+                subject=var.name)
+
+
+def float_attribute_not_finite(ctx: CheckContext) -> Iterator[Violation]:
+    """DAE520: start, nominal, min and max of a Float variable are numbers."""
+    return _violations(ctx, NOT_FINITE)
+
+
+def nominal_not_positive(ctx: CheckContext) -> Iterator[Violation]:
+    """DAE521: a nominal value is positive."""
+    return _violations(ctx, NOMINAL_NOT_POSITIVE)
+
+
+def min_greater_than_max(ctx: CheckContext) -> Iterator[Violation]:
+    """DAE522: min <= max."""
+    return _violations(ctx, MIN_ABOVE_MAX)
+
+
+CHECKS: dict[str, Check] = {
+    "DAE520": float_attribute_not_finite,
+    "DAE521": nominal_not_positive,
+    "DAE522": min_greater_than_max,
+}

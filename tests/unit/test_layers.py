@@ -17,7 +17,7 @@ PACKAGE = Path(__file__).resolve().parents[2] / "conformance"
 FLOORS: list[tuple[str, ...]] = [
     ("__main__",),
     ("cli",),
-    ("simulate_command", "parallel"),
+    ("simulate_command", "check_command", "rules_command", "exit_codes", "parallel"),
     ("engine",),
     ("checks", "probes"),
     ("simulate",),

@@ -19,6 +19,7 @@ FLOORS: list[tuple[str, ...]] = [
     ("cli",),
     ("simulate_command", "check_command", "rules_command", "exit_codes", "parallel"),
     ("engine",),
+    ("engine_options", "collector"),
     ("checks", "probes"),
     ("simulate",),
     ("runtime", "precommit", "context"),

@@ -3,7 +3,8 @@
 :func:`scan` looks at every entry's name, type and declared size before anything is read, and
 sorts the entries into usable members and excluded ones, with a violation for each problem (see
 :mod:`conformance.fmu` for the pseudo-rules). It reads no member data: :mod:`conformance.fmu`
-builds the ``FmuSource`` from the :class:`ScanResult` and reads, bounded by the same limits.
+builds the ``FmuSource`` (:mod:`conformance.archive_source`) from the :class:`ScanResult`, which
+reads, bounded by the same limits.
 """
 from __future__ import annotations
 

@@ -23,8 +23,9 @@ FLOORS: list[tuple[str, ...]] = [
     ("checks", "probes"),
     ("simulate",),
     ("runtime", "precommit", "context"),
-    ("fmu", "archive_source", "archive_scan", "archive_base", "schemas", "schema_messages",
-     "xmlsafe", "manifest", "reporters", "ruledocs", "baseline"),
+    ("fmu", "archive_source", "archive_scan", "archive_zip", "archive_folder", "archive_inventory",
+     "archive_base", "schemas", "schema_messages", "xmlsafe", "manifest", "reporters", "ruledocs",
+     "baseline"),
     ("drafts", "catalogue", "config"),
     ("numerics", "model", "matching", "findings", "paths", "progress", "__init__"),
 ]

@@ -27,7 +27,8 @@ FLOORS: list[tuple[str, ...]] = [
      "archive_base", "schemas", "schema_messages", "xmlsafe", "manifest", "reporters", "ruledocs",
      "baseline"),
     ("drafts", "catalogue", "config"),
-    ("numerics", "model", "matching", "findings", "paths", "progress", "__init__"),
+    ("numerics", "model", "bipartite", "matching", "dulmage_mendelsohn", "findings", "paths",
+     "progress", "__init__"),
 ]
 
 

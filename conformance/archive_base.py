@@ -1,8 +1,9 @@
 """What listing and reading an FMU share: pseudo-rule names, limits, members, entry names.
 
-:mod:`conformance.archive_scan` lists the entries and :mod:`conformance.fmu` reads them; both
-import this module and it imports neither, so there is no import cycle. The rule names and
-:class:`ArchiveLimits` are re-exported by :mod:`conformance.fmu`; callers import them from there.
+:mod:`conformance.archive_scan` lists the entries and :mod:`conformance.archive_source` reads
+them; both import this module and it imports neither, so there is no import cycle. The rule names
+and :class:`ArchiveLimits` are re-exported by :mod:`conformance.fmu`; callers import them from
+there.
 """
 from __future__ import annotations
 

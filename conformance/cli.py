@@ -1,49 +1,26 @@
-"""Command line: argument parsing and wiring only; computes the exit code.
+"""Command line: argument parsing and wiring only; each command returns the exit code.
 
-Exit codes: 0 no finding at the ``--fail-on`` severity (default error) or above, 1 at least one
-(findings accepted by ``--baseline`` do not count), 2 usage or internal error.
+The commands live beside it: :mod:`conformance.check_command` (``check``, ``pre-commit``),
+:mod:`conformance.rules_command` (``rules``, ``explain``) and :mod:`conformance.simulate_command`;
+the exit codes and :class:`~conformance.exit_codes.UsageError` in :mod:`conformance.exit_codes`.
 """
 from __future__ import annotations
 
 import argparse
 import logging
-import os
-import socket
 import sys
-from dataclasses import dataclass
-from datetime import datetime, timezone
 from pathlib import Path
 from typing import Sequence
 
 from . import __version__
-from .baseline import Baseline, BaselineError, BaselineResult
-from .baseline import apply as apply_baseline
-from .baseline import load as load_baseline
-from .baseline import write as write_baseline
-from .catalogue import Catalogue, CatalogueError, RuleSpec, default_catalogue
-from .config import FAIL_ON, ConfigError, load_config
-from .drafts.detect import ALL_DRAFTS, DRAFT_LABELS
-from .engine import EngineOptions
-from .findings import Report, RunInfo, Severity
-from .parallel import check_all
-from .precommit import fmu_roots
-from .progress import make_progress
+from .catalogue import CatalogueError
+from .check_command import cmd_check, cmd_precommit
+from .config import FAIL_ON
+from .drafts.detect import ALL_DRAFTS
+from .exit_codes import EXIT_USAGE, UsageError
 from .reporters import REPORTER_BY_NAME
-from .ruledocs import render_markdown
+from .rules_command import cmd_explain, cmd_rules
 from . import simulate_command
-
-EXIT_OK, EXIT_FINDINGS, EXIT_USAGE = 0, 1, 2
-
-
-class UsageError(Exception):
-    pass
-
-
-def _split(values: Sequence[str] | None) -> tuple[str, ...]:
-    out: list[str] = []
-    for value in values or ():
-        out.extend(v.strip() for v in value.split(",") if v.strip())
-    return tuple(out)
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -124,221 +101,6 @@ def _check_arguments(check: argparse.ArgumentParser) -> None:
                        help="progress on stderr (auto: on a terminal, outside CI, for several "
                             "FMUs or with probes)")
 
-
-def _config(args: argparse.Namespace) -> dict:
-    try:
-        return load_config(args.config).values
-    except ConfigError as exc:
-        raise UsageError(str(exc)) from None
-
-
-def _options(args: argparse.Namespace, config: dict | None = None) -> EngineOptions:
-    config = _config(args) if config is None else config
-    severity = dict(config.get("severity", {}))
-    for item in args.severity or ():
-        code, sep, level = item.partition("=")
-        if not sep:
-            raise UsageError(f"--severity takes RULE=LEVEL, not {item!r}")
-        severity[code.strip()] = level.strip()
-    for level in severity.values():
-        try:
-            Severity.parse(level)
-        except ValueError as exc:
-            raise UsageError(str(exc)) from None
-    return EngineOptions(
-        select=_split(args.select) or tuple(config.get("select", ())),
-        ignore=_split(args.ignore) or tuple(config.get("ignore", ())),
-        severity=tuple(severity.items()),
-        draft=args.draft or config.get("draft", "auto"),
-        probes=not args.no_probes and bool(config.get("probes", True)),
-        probes_only=args.probes_only, seed=args.seed,
-    )
-
-
-def _outputs(args: argparse.Namespace) -> list[tuple[str, str | None]]:
-    specs = args.format or ["console"]
-    outputs: list[tuple[str, str | None]] = []
-    for spec in specs:
-        name, sep, file = spec.partition(":")
-        if name not in REPORTER_BY_NAME:
-            raise UsageError(f"unknown format {name!r} (choose from {', '.join(REPORTER_BY_NAME)})")
-        outputs.append((name, file if sep else None))
-    bare = [i for i, (_, f) in enumerate(outputs) if f is None]
-    if args.output:
-        if len(bare) != 1:
-            raise UsageError("-o needs exactly one --format without its own file")
-        outputs[bare[0]] = (outputs[bare[0]][0], args.output)
-    return outputs
-
-
-def _use_color(choice: str, file: str | None) -> bool:
-    if choice == "always":
-        return True
-    if choice == "never" or file is not None or os.environ.get("NO_COLOR"):
-        return False
-    return sys.stdout.isatty()
-
-
-@dataclass(frozen=True)
-class _RunSettings:
-    """What decides the exit code and how the run goes, from the command line or the config."""
-
-    fail_on: str
-    exit_zero: bool
-    baseline: str | None
-    jobs: int
-
-
-def _settings(args: argparse.Namespace, config: dict) -> _RunSettings:
-    baseline = None if args.no_baseline else (args.baseline or config.get("baseline"))
-    jobs = args.jobs if args.jobs is not None else config.get("jobs", 1)
-    return _RunSettings(
-        fail_on=args.fail_on or config.get("fail-on", "error"),
-        exit_zero=bool(args.exit_zero if args.exit_zero is not None
-                       else config.get("exit-zero", False)),
-        baseline=baseline, jobs=jobs or os.cpu_count() or 1)
-
-
-def _read_baseline(settings: _RunSettings, args: argparse.Namespace) -> Baseline | None:
-    if settings.baseline is None or args.write_baseline:
-        return None  # a baseline being written replaces the one being read
-    try:
-        return load_baseline(Path(settings.baseline))
-    except BaselineError as exc:
-        hint = f"; create it with --write-baseline {settings.baseline}" \
-            if not Path(settings.baseline).exists() else ""
-        raise UsageError(f"{exc}{hint}") from None
-
-
-def exit_code(report: Report, fail_on: str) -> int:
-    """1 when a finding reaches the ``--fail-on`` severity, else 0."""
-    if fail_on == "never":
-        return EXIT_OK
-    return EXIT_FINDINGS if report.has_at_least(Severity.parse(fail_on)) else EXIT_OK
-
-
-def cmd_check(args: argparse.Namespace) -> int:
-    catalogue = default_catalogue()
-    config = _config(args)
-    options = _options(args, config)
-    settings = _settings(args, config)
-    outputs = _outputs(args)
-    baseline = _read_baseline(settings, args)
-    durations: dict[str, float] = {}
-    started = datetime.now(timezone.utc).replace(microsecond=0).isoformat()
-    progress = make_progress(args.progress, total=len(args.paths), probes=options.probes)
-    try:
-        report = check_all(args.paths, options=options, catalogue=catalogue,
-                           jobs=settings.jobs, progress=progress, durations=durations)
-    except ValueError as exc:  # a bad --select/--ignore pattern
-        raise UsageError(str(exc)) from None
-    run = RunInfo(timestamp=started, hostname=socket.gethostname(),
-                  durations=tuple(durations.items()))
-    result = None
-    if args.write_baseline:
-        try:
-            baseline = write_baseline(report, Path(args.write_baseline))
-        except BaselineError as exc:
-            raise UsageError(str(exc)) from None
-        result = apply_baseline(report, baseline, file=args.write_baseline)
-    elif baseline is not None:
-        result = apply_baseline(report, baseline, file=settings.baseline)
-    shown = result.marked if result else report
-    note = _baseline_note(result, args.write_baseline or settings.baseline) if result else ""
-    if not _write_outputs(shown, catalogue, outputs, args.color, run, console_note=note):
-        return EXIT_USAGE
-    if settings.exit_zero:
-        return EXIT_OK
-    return exit_code(result.new if result else report, settings.fail_on)
-
-
-def _baseline_note(result: BaselineResult, file: str | None) -> str:
-    counts = result.summary()
-    note = (f"baseline {file}: {counts['baselined']} finding"
-            f"{'' if counts['baselined'] == 1 else 's'} accepted, {counts['new']} new")
-    if counts["stale"]:
-        note += f", {counts['stale']} fixed since (rewrite it with --write-baseline)"
-    return note + "\n"
-
-
-def _write_outputs(report: Report, catalogue: Catalogue, outputs: list[tuple[str, str | None]],
-                   color: str, run: RunInfo, *, console_note: str = "") -> bool:
-    """Render and write every output; each on its own, so one failing never loses the others."""
-    ok = True
-    for name, file in outputs:
-        try:
-            text = REPORTER_BY_NAME[name](report, catalogue, color=_use_color(color, file),
-                                          run=run)
-        except Exception as exc:
-            logging.getLogger(__name__).debug("reporter %s failed", name, exc_info=True)
-            print(f"lsdae: internal error in the {name} reporter: {type(exc).__name__}: {exc}",
-                  file=sys.stderr)
-            ok = False
-            continue
-        if name == "console":
-            text += console_note
-        if file is None or file == "-":
-            sys.stdout.write(text)
-            continue
-        try:
-            Path(file).parent.mkdir(parents=True, exist_ok=True)
-            Path(file).write_text(text, encoding="utf-8")
-        except OSError as exc:
-            print(f"lsdae: cannot write {file}: {exc}", file=sys.stderr)
-            ok = False
-    return ok
-
-
-def cmd_precommit(args: argparse.Namespace) -> int:
-    """``lsdae pre-commit FILES``: check the FMUs the changed files belong to."""
-    args.paths = fmu_roots(args.paths)
-    if not args.paths:
-        return EXIT_OK
-    return cmd_check(args)
-
-
-def _rule_line(rule: RuleSpec) -> str:
-    return f"{rule.code}  {rule.name:<40} {str(rule.severity):<8} {rule.summary}"
-
-
-def cmd_rules(args: argparse.Namespace) -> int:
-    catalogue = default_catalogue()
-    if args.format == "markdown":
-        sys.stdout.write(render_markdown(catalogue))
-    else:
-        for rule in catalogue:
-            print(_rule_line(rule))
-    return EXIT_OK
-
-
-def explain_text(rule: RuleSpec) -> str:
-    drafts = ", ".join("all drafts" if d == "*" else DRAFT_LABELS.get(d, d) for d in rule.drafts)
-    parts = [
-        f"{rule.code} {rule.name}  ({rule.severity}, {rule.stage} stage)",
-        "", rule.summary, "",
-        f"Applies to: {drafts}",
-        f"Spec:       {rule.spec}",
-    ]
-    if rule.aliases:
-        parts.append(f"Aliases:    {', '.join(rule.aliases)}")
-    parts += ["", "Why it matters:", _indent(rule.rationale), "", "Fails:", _indent(rule.bad),
-              "", "Passes:", _indent(rule.good)]
-    if rule.options:
-        parts += ["", "Options:"] + [f"    {k} = {v!r}" for k, v in rule.options]
-    return "\n".join(parts) + "\n"
-
-
-def _indent(text: str) -> str:
-    return "\n".join(f"    {line}" if line else "" for line in text.splitlines())
-
-
-def cmd_explain(args: argparse.Namespace, catalogue: Catalogue | None = None) -> int:
-    catalogue = catalogue or default_catalogue()
-    rule = catalogue.get(args.rule)
-    if rule is None:
-        raise UsageError(f"no rule {args.rule!r} (see `lsdae rules`)")
-    sys.stdout.write(explain_text(rule))
-    return EXIT_OK
 
 
 COMMANDS = {"check": cmd_check, "pre-commit": cmd_precommit, "rules": cmd_rules,

@@ -2,8 +2,10 @@
 
 Checks and stages yield plain :class:`Violation` objects; the engine looks their rule up in the
 catalogue, applies the user's selection and severity overrides, groups repeated violations, adds
-the source line, and freezes everything into an :class:`FmuReport`. Nothing here raises for bad
-input: an exception inside a check becomes an ``internal-error`` finding and the run goes on.
+the source line, and freezes everything into an :class:`FmuReport` (the selection is in
+:mod:`conformance.engine_options`, the grouping and source lines in :mod:`conformance.collector`).
+Nothing here raises for bad input: an exception inside a check becomes an ``internal-error``
+finding and the run goes on.
 """
 from __future__ import annotations
 
@@ -11,17 +13,18 @@ import contextlib
 import gc
 import logging
 import time
-from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Iterable, Iterator, Sequence
+from typing import Iterator, Sequence
 
 from . import __version__
-from .catalogue import Catalogue, RuleSpec, default_catalogue
+from .catalogue import Catalogue, default_catalogue
 from .checks import REGISTRY
+from .collector import Collector
 from .context import CheckContext
 from .drafts.detect import UNKNOWN, detect_draft, unrecognised_violations
 from .drafts.migrate import legacy_violations
-from .findings import Finding, FmuReport, Location, Report, Severity, Violation, evidence
+from .engine_options import EngineOptions, RuleSelection
+from .findings import FmuReport, Location, Report, Violation, evidence
 from .fmu import ArchiveLimits, ArchiveReadError, open_fmu
 from .manifest import MANIFEST, Manifest, read_manifest
 from .model import MODEL_DESCRIPTION, ModelDescription, read_model_description
@@ -31,137 +34,6 @@ from .xmlsafe import parse_xml
 log = logging.getLogger(__name__)
 
 STATIC_STAGES = ("static",)
-GROUP_SHOWN = 5
-START_TAG_LOOKBACK = 200  # lines searched upwards for the '<' that starts a tag
-
-
-@dataclass(frozen=True)
-class EngineOptions:
-    """What the user chose: rule selection, severity overrides, draft, probes."""
-
-    select: tuple[str, ...] = ()
-    ignore: tuple[str, ...] = ()
-    severity: tuple[tuple[str, str], ...] = ()
-    draft: str = "auto"
-    probes: bool = True
-    probes_only: bool = False
-    seed: int = 0
-    group_threshold: int = 3
-
-
-class RuleSelection:
-    """The effective rule set: which codes are on, and at which severity."""
-
-    def __init__(self, catalogue: Catalogue, options: EngineOptions):
-        self.catalogue = catalogue
-        selected = {r.code for r in catalogue}
-        if options.select:
-            selected = {r.code for p in options.select for r in self._resolve(p)}
-        for pattern in options.ignore:
-            selected -= {r.code for r in self._resolve(pattern)}
-        self.enabled = frozenset(selected)
-        self.severity: dict[str, Severity] = {r.code: r.severity for r in catalogue}
-        for pattern, level in options.severity:
-            for rule in self._resolve(pattern):
-                self.severity[rule.code] = Severity.parse(level)
-
-    def _resolve(self, pattern: str) -> list[RuleSpec]:
-        rules = self.catalogue.matching(pattern.strip())
-        if not rules:
-            raise ValueError(f"no rule matches {pattern!r} (see `lsdae rules`)")
-        return rules
-
-
-class _Collector:
-    """Accumulates violations per rule and turns them into grouped, located findings."""
-
-    def __init__(self, selection: RuleSelection, texts: dict[str, bytes], threshold: int):
-        self.selection = selection
-        self.texts = texts
-        self.threshold = threshold
-        self.items: list[tuple[RuleSpec, Violation]] = []
-
-    def add(self, rule: RuleSpec, violations: Iterable[Violation]) -> None:
-        for v in violations:
-            target = rule
-            if v.rule and v.rule not in (rule.name, rule.code):
-                target = self.selection.catalogue.get(v.rule) or rule
-            if target.code in self.selection.enabled:
-                self.items.append((target, v))
-
-    def add_stage(self, violations: Iterable[Violation]) -> None:
-        """Violations from loaders and stages, which name their rule themselves."""
-        for v in violations:
-            rule = self.selection.catalogue.get(v.rule or "")
-            if rule is None:
-                rule = self.selection.catalogue["internal-error"]
-                v = replace(v, message=f"unknown rule {v.rule!r}: {v.message}")
-            if rule.code in self.selection.enabled:
-                self.items.append((rule, v))
-
-    def emit(self, rule_name: str, violation: Violation) -> None:
-        self.add_stage([replace(violation, rule=rule_name)])
-
-    def findings(self) -> tuple[Finding, ...]:
-        groups: dict[tuple[str, str, str], list[tuple[RuleSpec, Violation]]] = {}
-        for rule, v in self.items:
-            groups.setdefault((rule.code, v.message, v.location.file or ""), []).append((rule, v))
-        out: list[Finding] = []
-        for members in groups.values():
-            if len(members) > self.threshold:
-                out.append(self._grouped(members))
-            else:
-                out.extend(self._single(rule, v) for rule, v in members)
-        lines = _LineCache(self.texts)
-        out = [replace(f, location=lines.with_snippet(f.location)) for f in out]
-        return tuple(sorted(set(out), key=Finding.sort_key))
-
-    def _single(self, rule: RuleSpec, v: Violation) -> Finding:
-        message = v.message.replace("{subject}", f"'{v.subject}'" if v.subject else "")
-        return Finding(rule.code, rule.name, self.selection.severity[rule.code], message,
-                       v.location, v.evidence, v.subject)
-
-    def _grouped(self, members: list[tuple[RuleSpec, Violation]]) -> Finding:
-        members = sorted(members, key=lambda m: m[1].location.sort_key())
-        rule, first = members[0]
-        subjects = [v.subject for _, v in members if v.subject]
-        shown = ", ".join(f"'{s}'" for s in subjects[:GROUP_SHOWN])
-        more = ", …" if len(subjects) > GROUP_SHOWN else ""
-        if "{subject}" in first.message:
-            message = first.message.replace("{subject}", f"{len(members)} items ({shown}{more})")
-        else:
-            message = f"{first.message} ({len(members)} times)"
-        ev = first.evidence + evidence(
-            count=len(members), subjects=subjects[:20],
-            lines=[v.location.line for _, v in members[:20]])
-        return Finding(rule.code, rule.name, self.selection.severity[rule.code], message,
-                       first.location, ev, None, len(members))
-
-
-class _LineCache:
-    def __init__(self, texts: dict[str, bytes]):
-        self.texts = texts
-        self.lines: dict[str, list[bytes]] = {}
-
-    def with_snippet(self, loc: Location) -> Location:
-        """Add the source line; move a line that ends a multi-line start tag to its start.
-
-        libxml2 records the line where a start tag *ends*. A raw '<' cannot occur in attribute
-        text, so the nearest line at or above it that holds a '<' is where the tag begins.
-        Done here, for the few lines findings point at, not for every element when parsing.
-        """
-        if not loc.file or not loc.line or loc.file not in self.texts:
-            return loc
-        lines = self.lines.setdefault(loc.file, self.texts[loc.file].split(b"\n"))
-        if loc.line > len(lines):
-            return loc
-        line = loc.line
-        for above in range(line, max(line - START_TAG_LOOKBACK, 0), -1):
-            if b"<" in lines[above - 1]:
-                line = above
-                break
-        text = lines[line - 1].decode("utf-8", "replace").rstrip()
-        return replace(loc, line=line, snippet=text[:240])
 
 
 def check_fmu(path: Path, *, options: EngineOptions = EngineOptions(),
@@ -170,7 +42,7 @@ def check_fmu(path: Path, *, options: EngineOptions = EngineOptions(),
     catalogue = catalogue or default_catalogue()
     selection = RuleSelection(catalogue, options)
     texts: dict[str, bytes] = {}
-    collector = _Collector(selection, texts, options.group_threshold)
+    collector = Collector(selection, texts, options.group_threshold)
     state = _State()
     try:
         with _cyclic_gc_paused():
@@ -214,7 +86,7 @@ class _State:
 
 
 def _run(path: Path, options: EngineOptions, catalogue: Catalogue, selection: RuleSelection,
-         collector: _Collector, texts: dict[str, bytes], state: _State) -> None:
+         collector: Collector, texts: dict[str, bytes], state: _State) -> None:
     limits = ArchiveLimits.from_options(catalogue["archive-too-large"].option_values)
     source, violations = open_fmu(path, limits=limits)
     collector.add_stage(violations)
@@ -234,7 +106,7 @@ def _run(path: Path, options: EngineOptions, catalogue: Catalogue, selection: Ru
 
 
 def _run_probe_stage(source, ctx: CheckContext, options: EngineOptions, catalogue: Catalogue,
-                     selection: RuleSelection, collector: _Collector, state: _State) -> None:
+                     selection: RuleSelection, collector: Collector, state: _State) -> None:
     """Dynamic probes: load the binary in a worker process (conformance.probes)."""
     have = {"model-description": ctx.model is not None, "manifest": ctx.manifest is not None,
             "binary": True}  # whether there is a binary for this platform, the runner decides
@@ -262,7 +134,7 @@ def _run_probe_stage(source, ctx: CheckContext, options: EngineOptions, catalogu
     state.info.update(outcome.info)
 
 
-def _read(source, name: str, collector: _Collector) -> bytes | None:
+def _read(source, name: str, collector: Collector) -> bytes | None:
     try:
         return source.read(name)
     except ArchiveReadError as exc:  # limits, corrupt data: the archive layer names the rule
@@ -273,7 +145,7 @@ def _read(source, name: str, collector: _Collector) -> bytes | None:
     return None
 
 
-def _read_xml(source, name: str, collector: _Collector, texts: dict[str, bytes]):
+def _read_xml(source, name: str, collector: Collector, texts: dict[str, bytes]):
     """Read and safely parse one XML member; keep its bytes for source excerpts."""
     data = _read(source, name, collector)
     if data is None:
@@ -284,7 +156,7 @@ def _read_xml(source, name: str, collector: _Collector, texts: dict[str, bytes])
     return tree
 
 
-def _read_model(source, names: Sequence[str], options: EngineOptions, collector: _Collector,
+def _read_model(source, names: Sequence[str], options: EngineOptions, collector: Collector,
                 texts: dict[str, bytes]) -> ModelDescription | None:
     if MODEL_DESCRIPTION not in names:
         collector.emit("model-description-missing", Violation(
@@ -298,7 +170,7 @@ def _read_model(source, names: Sequence[str], options: EngineOptions, collector:
     return read_model_description(tree, file=MODEL_DESCRIPTION)
 
 
-def _read_manifest(source, names: Sequence[str], options: EngineOptions, collector: _Collector,
+def _read_manifest(source, names: Sequence[str], options: EngineOptions, collector: Collector,
                    texts: dict[str, bytes], state: _State) -> Manifest | None:
     if MANIFEST not in names:
         collector.emit("manifest-missing", Violation(
@@ -321,7 +193,7 @@ def _read_manifest(source, names: Sequence[str], options: EngineOptions, collect
 
 
 def _run_static(ctx: CheckContext, catalogue: Catalogue, selection: RuleSelection,
-                collector: _Collector, state: _State) -> None:
+                collector: Collector, state: _State) -> None:
     have = {"model-description": ctx.model is not None, "manifest": ctx.manifest is not None}
     for rule in catalogue:
         if rule.stage not in STATIC_STAGES or rule.code not in selection.enabled:

@@ -21,7 +21,8 @@ from pathlib import Path
 from typing import Callable, Sequence
 
 from .catalogue import Catalogue, default_catalogue
-from .engine import EngineOptions, RuleSelection, check_fmu, check_paths
+from .engine import EngineOptions, check_fmu, check_paths
+from .engine_options import RuleSelection
 from .findings import Finding, FmuReport, Location, Report, evidence
 from .progress import NoProgress, Progress
 

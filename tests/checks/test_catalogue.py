@@ -7,7 +7,7 @@ import pytest
 
 from conformance.catalogue import default_catalogue
 from conformance.checks import REGISTRY
-from conformance.cli import explain_text
+from conformance.rules_command import explain_text
 from tests.fixturekit import FIXTURES
 
 CATALOGUE = default_catalogue()

@@ -17,15 +17,18 @@ PACKAGE = Path(__file__).resolve().parents[2] / "conformance"
 FLOORS: list[tuple[str, ...]] = [
     ("__main__",),
     ("cli",),
-    ("simulate_command", "parallel"),
+    ("simulate_command", "check_command", "rules_command", "exit_codes", "parallel"),
     ("engine",),
+    ("engine_options", "collector"),
     ("checks", "probes"),
     ("simulate",),
     ("runtime", "precommit", "context"),
-    ("fmu", "schemas", "schema_messages", "xmlsafe", "archive_scan", "archive_base", "manifest",
-     "reporters", "ruledocs", "baseline"),
+    ("fmu", "archive_source", "archive_scan", "archive_zip", "archive_folder", "archive_inventory",
+     "archive_base", "schemas", "schema_messages", "xmlsafe", "manifest", "reporters", "ruledocs",
+     "baseline"),
     ("drafts", "catalogue", "config"),
-    ("numerics", "model", "matching", "findings", "paths", "progress", "attributes", "__init__"),
+    ("numerics", "model", "bipartite", "matching", "dulmage_mendelsohn", "findings", "paths",
+     "progress", "attributes", "__init__"),
 ]
 
 

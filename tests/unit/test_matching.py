@@ -18,12 +18,9 @@ from hypothesis import strategies as st
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import structural_rank as scipy_structural_rank
 
-from conformance.matching import (
-    BipartitePattern,
-    dulmage_mendelsohn,
-    maximum_matching,
-    structural_rank,
-)
+from conformance.bipartite import BipartitePattern
+from conformance.dulmage_mendelsohn import dulmage_mendelsohn
+from conformance.matching import maximum_matching, structural_rank
 
 MAX = 12
 

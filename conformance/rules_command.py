@@ -1,0 +1,54 @@
+"""``lsdae rules`` and ``lsdae explain``: the catalogue as a list, or one rule in full."""
+from __future__ import annotations
+
+import argparse
+import sys
+
+from .catalogue import Catalogue, RuleSpec, default_catalogue
+from .drafts.detect import DRAFT_LABELS
+from .exit_codes import EXIT_OK, UsageError
+from .ruledocs import render_markdown
+
+
+def _rule_line(rule: RuleSpec) -> str:
+    return f"{rule.code}  {rule.name:<40} {str(rule.severity):<8} {rule.summary}"
+
+
+def cmd_rules(args: argparse.Namespace) -> int:
+    catalogue = default_catalogue()
+    if args.format == "markdown":
+        sys.stdout.write(render_markdown(catalogue))
+    else:
+        for rule in catalogue:
+            print(_rule_line(rule))
+    return EXIT_OK
+
+
+def explain_text(rule: RuleSpec) -> str:
+    drafts = ", ".join("all drafts" if d == "*" else DRAFT_LABELS.get(d, d) for d in rule.drafts)
+    parts = [
+        f"{rule.code} {rule.name}  ({rule.severity}, {rule.stage} stage)",
+        "", rule.summary, "",
+        f"Applies to: {drafts}",
+        f"Spec:       {rule.spec}",
+    ]
+    if rule.aliases:
+        parts.append(f"Aliases:    {', '.join(rule.aliases)}")
+    parts += ["", "Why it matters:", _indent(rule.rationale), "", "Fails:", _indent(rule.bad),
+              "", "Passes:", _indent(rule.good)]
+    if rule.options:
+        parts += ["", "Options:"] + [f"    {k} = {v!r}" for k, v in rule.options]
+    return "\n".join(parts) + "\n"
+
+
+def _indent(text: str) -> str:
+    return "\n".join(f"    {line}" if line else "" for line in text.splitlines())
+
+
+def cmd_explain(args: argparse.Namespace, catalogue: Catalogue | None = None) -> int:
+    catalogue = catalogue or default_catalogue()
+    rule = catalogue.get(args.rule)
+    if rule is None:
+        raise UsageError(f"no rule {args.rule!r} (see `lsdae rules`)")
+    sys.stdout.write(explain_text(rule))
+    return EXIT_OK

@@ -6,6 +6,8 @@ with a count, and adds the source line each finding points at (:class:`LineCache
 """
 from __future__ import annotations
 
+import re
+
 from dataclasses import replace
 from typing import Iterable
 
@@ -73,7 +75,7 @@ class Collector:
         shown = ", ".join(f"'{s}'" for s in subjects[:GROUP_SHOWN])
         more = ", …" if len(subjects) > GROUP_SHOWN else ""
         if "{subject}" in first.message:
-            message = first.message.replace("{subject}", f"{len(members)} items ({shown}{more})")
+            message = plural_subject(first.message, f"{len(members)} items ({shown}{more})")
         else:
             message = f"{first.message} ({len(members)} times)"
         ev = first.evidence + evidence(
@@ -81,6 +83,24 @@ class Collector:
             lines=[v.location.line for _, v in members[:20]])
         return Finding(rule.code, rule.name, self.selection.severity[rule.code], message,
                        first.location, ev, None, len(members))
+
+
+# The verbs that follow "{subject}" in messages, in the third person singular, and their plural.
+_PLURAL_VERBS = {"is": "are", "has": "have", "does": "do", "was": "were", "names": "name",
+                 "uses": "use", "reads": "read", "takes": "take", "returns": "return",
+                 "overlaps": "overlap", "lies": "lie", "gives": "give", "expands": "expand",
+                 "differs": "differ", "depends": "depend", "lists": "list", "changes": "change"}
+_VERB_AFTER_SUBJECT = re.compile(r"\{subject\}(\s+)([a-z]+)\b")
+
+
+def plural_subject(message: str, phrase: str) -> str:
+    """``message`` with ``{subject}`` replaced by a plural ``phrase`` ("3 items (...)") and the
+    verb that follows it made to agree ("is declared" -> "are declared")."""
+    def agree(match: re.Match[str]) -> str:
+        verb = match.group(2)
+        return "{subject}" + match.group(1) + _PLURAL_VERBS.get(verb, verb)
+
+    return _VERB_AFTER_SUBJECT.sub(agree, message).replace("{subject}", phrase)
 
 
 class LineCache:

@@ -11,13 +11,16 @@ command line's, and whose time limits fit the budget), then reads the trajectori
 report's ``info["simulation"]``. A crash or hang of the FMU is a ``binary-*`` finding, never a
 traceback. It sits above the engine, beside ``cli``.
 
-Exit codes: 0 the stop time was reached without a finding, 1 a finding (the trajectory up to
-where the run ended is still written), 2 usage error or nothing could be simulated.
+Exit codes, as ``fmpy simulate``: 0 the integration reached the stop time and the trajectory was
+written, 1 it failed (with the reason; the trajectory up to where it ended is still written) or
+``--fail-on`` was given and a finding reaches it, 2 usage error. Static findings are summarised
+in one line with a pointer to ``lsdae check``.
 """
 from __future__ import annotations
 
 import argparse
 import dataclasses
+import math
 import os
 import sys
 from dataclasses import dataclass, field
@@ -56,22 +59,33 @@ class Simulation:
                                   if c in codes))
 
 
-def default_stop_time(path: Path | str) -> float | None:
-    """The DefaultExperiment's stopTime, read safely; None when absent or unreadable."""
+def default_experiment(path: Path | str) -> dict[str, float]:
+    """The DefaultExperiment's startTime, stopTime and tolerance that are finite numbers, read
+    safely (``{}`` when absent or unreadable)."""
     source, _ = open_fmu(Path(path))
     if source is None:
-        return None
+        return {}
     with source:
         try:
             data = source.read(MODEL_DESCRIPTION)
         except (KeyError, ArchiveReadError, OSError):
-            return None
+            return {}
     tree, _ = parse_xml(data, file=MODEL_DESCRIPTION)
     element = tree.getroot().find("DefaultExperiment") if tree is not None else None
-    try:
-        return float(element.get("stopTime")) if element is not None else None
-    except (TypeError, ValueError):
-        return None
+    out: dict[str, float] = {}
+    for key in ("startTime", "stopTime", "tolerance"):
+        try:
+            value = float(element.get(key)) if element is not None else math.nan
+        except (TypeError, ValueError):
+            continue
+        if math.isfinite(value):
+            out[key] = value
+    return out
+
+
+def default_stop_time(path: Path | str) -> float | None:
+    """The DefaultExperiment's stopTime; None when absent or unreadable."""
+    return default_experiment(path).get("stopTime")
 
 
 def simulation_catalogue(settings: Any, *, time_limit: float | None = None) -> Catalogue:
@@ -138,19 +152,33 @@ def _times(text: str) -> tuple[float, ...]:
         raise argparse.ArgumentTypeError(str(exc)) from None
 
 
+EPILOG = """exit codes:
+  0  the integration reached the stop time and the trajectory was written
+  1  the integration failed or stopped early (the reason is printed; the trajectory up to
+     where it ended is still written), nothing could be simulated, the output could not be
+     written, or --fail-on was given and a finding reaches it
+  2  usage error (bad arguments, no such file)
+
+The start time is the DefaultExperiment's startTime (0 without one); the stop time and the
+tolerance are the DefaultExperiment's unless given. Static findings (archive, XML, schema) are
+summarised in one line: `lsdae check FMU` shows them."""
+
+
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     """Add the ``simulate`` subcommand to ``subparsers`` (from ``add_subparsers``)."""
     p = subparsers.add_parser(
         "simulate", help="integrate an FMU in DAE mode (IDA) and/or ODE mode (CVODE)",
         description="Integrate an fmi-ls-dae FMU in DAE mode with SUNDIALS IDA (the FMU's "
-                    "Jacobian), in ODE mode with CVODE, or both and compare them.")
+                    "Jacobian), in ODE mode with CVODE, or both and compare them.",
+        epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("fmu", metavar="FMU", help="a .fmu file or an unpacked FMU folder")
     p.add_argument("--mode", choices=("dae", "ode", "both"), default="dae",
                    help="DAE mode (default), ODE mode, or both and compare")
     p.add_argument("--stop-time", type=_positive(float), metavar="T",
                    help="default: the DefaultExperiment's stopTime, else start + 1")
-    p.add_argument("--rtol", type=_positive(float), default=1e-6, metavar="R",
-                   help="relative tolerance (default 1e-6); atol = rtol * nominal per variable")
+    p.add_argument("--rtol", type=_positive(float), default=None, metavar="R",
+                   help="relative tolerance (default: the DefaultExperiment's tolerance, else "
+                        "1e-6); atol = rtol * nominal per variable")
     p.add_argument("--output-times", type=_times, metavar="t1,t2,...",
                    help="output times (default: an even grid, see --output-points)")
     p.add_argument("--output-points", type=_positive(int), default=101, metavar="N",
@@ -163,9 +191,30 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
                    help="step budget per mode (default 100000)")
     p.add_argument("--time-limit", type=_positive(float), default=60.0, metavar="S",
                    help="wall-clock budget per mode in seconds (default 60)")
-    p.add_argument("--color", choices=("auto", "always", "never"), default="auto")
+    p.add_argument("--fail-on", choices=("error", "warning"), default=None,
+                   help="also exit 1 when a finding (static or of the simulation) reaches this "
+                        "severity; by default only a failed integration does")
+    p.add_argument("--color", choices=("auto", "always", "never"), default="auto",
+                   help="colour the console output (default: auto, when a terminal)")
     p.add_argument("-v", "--verbose", action="store_true", help="log what the engine does")
     return p
+
+
+def _is_simulation_finding(finding: Any) -> bool:
+    """Findings of the run itself: the simulation rules, the binary-* rules, internal errors."""
+    return (finding.code in RULES_BY_MODE["both"] or finding.code.startswith("DAE70")
+            or finding.name == "internal-error")
+
+
+def _static_line(findings: list[Any], path: Path) -> str:
+    counts = {s: sum(f.severity == s for f in findings) for s in (Severity.ERROR,
+                                                                   Severity.WARNING,
+                                                                   Severity.INFO)}
+    parts = [f"{n} {s}{'' if n == 1 else 's'}" for s, n in counts.items() if n]
+    names = list(dict.fromkeys(f.name for f in findings))
+    shown = ", ".join(names[:3]) + (", ..." if len(names) > 3 else "")
+    return (f"static check: {', '.join(parts)} ({shown}); `lsdae check {path}` shows "
+            "them\n")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -176,13 +225,17 @@ def run(args: argparse.Namespace) -> int:
     if not path.exists():
         print(f"lsdae: {path}: no such file or folder", file=sys.stderr)
         return EXIT_USAGE
-    if args.rtol >= 1:
+    if args.rtol is not None and args.rtol >= 1:
         print("lsdae: --rtol must be below 1", file=sys.stderr)
         return EXIT_USAGE
-    stop = args.stop_time or default_stop_time(path) or 0.0
+    experiment = default_experiment(path)
     options = dict(default_catalogue()["simulation-failed"].option_values)  # the defaults
+    tolerance = experiment.get("tolerance")
+    rtol = args.rtol or (tolerance if tolerance is not None and 0 < tolerance < 1
+                         else options["rtol"])
     settings = Settings(**{
-        **options, "mode": args.mode, "rtol": args.rtol, "stop_time": stop,
+        **options, "mode": args.mode, "rtol": rtol,
+        "stop_time": args.stop_time or experiment.get("stopTime") or 0.0,
         "output_points": args.output_points, "output_times": tuple(args.output_times or ()),
         "max_steps": args.max_steps, "wall_seconds": args.time_limit, "record_wall_time": True})
     result = simulate_fmu(path, settings)
@@ -192,23 +245,36 @@ def run(args: argparse.Namespace) -> int:
         sys.stdout.write(_comparison_line(result.comparison))
     written = _write(args, result.trajectories)
     report = result.report
-    if report.findings:
-        _print_findings(report, result.catalogue, args.color)
+    own = [f for f in report.findings if _is_simulation_finding(f)]
+    static = [f for f in report.findings if not _is_simulation_finding(f)]
+    if own:
+        _print_findings(dataclasses.replace(report, findings=tuple(own)), result.catalogue,
+                        args.color)
+    if static:
+        sys.stdout.write(_static_line(static, path))
     reasons = result.skipped()
     if not result.trajectories:
-        reason = reasons[0] if reasons else str(dict(report.info).get("probes",
-                                                                      "no simulation ran"))
+        first_static = next((f for f in static if f.severity >= Severity.ERROR), None)
+        reason = (reasons[0] if reasons else f"{first_static.name}: {first_static.message}"
+                  if first_static else str(dict(report.info).get("probes",
+                                                                 "no simulation ran")))
         print(f"lsdae: nothing was simulated: {reason}", file=sys.stderr)
-        return EXIT_FINDINGS if report.findings else EXIT_USAGE
-    if not report.findings and any(not t.ok for t in result.trajectories):
+        return EXIT_FINDINGS
+    incomplete = [t for t in result.trajectories if not t.ok]
+    if incomplete and not own:
         for reason in reasons[:3]:
             print(f"note: {reason}")
     if not written:
-        return EXIT_USAGE
-    incomplete = any(not t.ok for t in result.trajectories)
-    worst = report.worst
-    return EXIT_FINDINGS if incomplete or (worst is not None and worst >= Severity.WARNING) \
-        else EXIT_OK
+        return EXIT_FINDINGS
+    if incomplete:
+        print(f"lsdae: the {incomplete[0].mode.upper()}-mode integration stopped at t = "
+              f"{incomplete[0].t_end:.10g} of {incomplete[0].stop_time:g}: "
+              f"{incomplete[0].message}", file=sys.stderr)
+        return EXIT_FINDINGS
+    if args.fail_on and (report.worst or Severity.INFO) >= Severity.parse(args.fail_on) \
+            and report.findings:
+        return EXIT_FINDINGS
+    return EXIT_OK
 
 
 def summary(traj: Any) -> str:

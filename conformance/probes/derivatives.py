@@ -216,8 +216,9 @@ def dependencies_kind_violated(ctx: ProbeContext, *, rtol: float, margin: float,
         tol = margin * (hi[1] + lo[1]) + rtol * max(v[2] for v in values)
         if hi[0] - lo[0] > tol:
             yield Violation(
-                f"{{subject}} is declared '{kind_of[(i, j)]}' but changes between sampling "
-                "points: the unknown is not affine in the known", layout.rows[i].location,
+                f"{{subject}}: declared '{kind_of[(i, j)]}', but the partial derivative "
+                "changes between sampling points (the unknown is not affine in the known)",
+                layout.rows[i].location,
                 evidence(entry=layout.entry(i, j), kind=kind_of[(i, j)], smallest=lo[0],
                          largest=hi[0], tolerance=tol,
                          points=[point_evidence(layout, lo[3]), point_evidence(layout, hi[3])]),

@@ -4,6 +4,7 @@ model and the manifest, used by every instance of the FMU.
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import Any, Mapping, Sequence
 
@@ -120,6 +121,7 @@ class Layout:
             inputs=usable(inputs), outputs=usable(ms_outputs or md_outputs),
             ode_outputs=usable(md_outputs), enable=enable, enable_status=status,
             enable_tunable=tunable, token=model.instantiation_token or "",
+            start_time=_start_time(model),
             model_identifier=(me.model_identifier if me else None) or "",
             names=names, nominal=nominal, bounds=bounds, start=start,
             flagged_start=frozenset(flagged),
@@ -127,6 +129,13 @@ class Layout:
             provides_directional=bool(me and me.flag("providesDirectionalDerivatives")),
             provides_adjoint=bool(me and me.flag("providesAdjointDerivatives")),
         )
+
+
+def _start_time(model: ModelDescription) -> float:
+    """The DefaultExperiment's startTime when it is a finite number, else 0."""
+    experiment = model.default_experiment
+    start = experiment.start_time if experiment is not None else None
+    return float(start) if start is not None and math.isfinite(start) else 0.0
 
 
 def _enable(model: ModelDescription, manifest: Manifest | None) -> tuple[int | None, str, bool]:

@@ -7,11 +7,14 @@ from __future__ import annotations
 
 import argparse
 import csv
+import shutil
+import zipfile
 
 import pytest
 
 from conformance.simulate_command import add_parser, run
 from scenes.build import build_scene
+from tests.fixtures.defects.variants import variant
 from tests.numerics.systems import VAN_DER_POL_IMPASSE
 
 
@@ -67,6 +70,44 @@ def test_impasse_is_a_finding_and_the_trajectory_up_to_it_is_written(tmp_path, c
     times = [float(r[0]) for r in _rows(out)[1:]]
     assert times and times[-1] < VAN_DER_POL_IMPASSE
     assert "algebraic-jacobian-singular-along-trajectory" in capsys.readouterr().out
+
+
+def test_static_findings_are_one_line_and_fail_only_with_fail_on(tmp_path, capsys):
+    """A resource compressed with bzip2 is a static warning (archive-compression-method): the
+    simulation still succeeds (exit 0), the warning is summarised in one line, and only
+    --fail-on warning turns it into exit 1."""
+    fmu = tmp_path / "bzip2.fmu"
+    shutil.copyfile(build_scene("HelloWorldDAE"), fmu)
+    with zipfile.ZipFile(fmu, "a") as zf:
+        zf.writestr("resources/notes.txt", "compressed the wrong way\n",
+                    compress_type=zipfile.ZIP_BZIP2)
+    out = tmp_path / "bzip2.csv"
+    assert _main([str(fmu), "-o", str(out), "--color", "never"]) == 0
+    printed = capsys.readouterr().out
+    assert out.is_file()
+    assert sum("static check:" in line for line in printed.splitlines()) == 1
+    assert "archive-compression-method" in printed and "lsdae check" in printed
+    assert _main([str(fmu), "--fail-on", "warning", "--color", "never"]) == 1
+
+
+def test_start_stop_and_tolerance_come_from_the_default_experiment(tmp_path, capsys):
+    fmu = variant("SimpleDAE", md_edits=[(
+        '<DefaultExperiment startTime="0" stopTime="1"/>',
+        '<DefaultExperiment startTime="2" stopTime="2.5" tolerance="1e-5"/>')])
+    out = tmp_path / "shifted.csv"
+    assert _main([str(fmu), "-o", str(out), "--color", "never"]) == 0
+    times = [float(r[0]) for r in _rows(out)[1:]]
+    assert times[0] == 2.0 and times[-1] == 2.5
+    assert "rtol 1e-05" in capsys.readouterr().out
+    assert _main([str(fmu), "-o", str(out), "--stop-time", "3", "--rtol", "1e-4"]) == 0
+    assert float(_rows(out)[-1][0]) == 3.0
+
+
+def test_nothing_simulated_is_a_failure_with_its_reason(tmp_path, capsys):
+    broken = tmp_path / "broken.fmu"
+    broken.write_bytes(b"not a zip archive")
+    assert _main([str(broken), "--color", "never"]) == 1
+    assert "nothing was simulated" in capsys.readouterr().err
 
 
 def test_usage_errors(tmp_path, capsys):

@@ -83,6 +83,11 @@ class _State:
         self.run: set[str] = set()
         self.skipped: set[tuple[str, str]] = set()
         self.info: dict[str, object] = {}
+        self.unread: dict[str, str] = {}  # need -> why the file it stands for was not read
+
+    def missing(self, need: str) -> str:
+        """Why a rule that needs ``need`` cannot run."""
+        return self.unread.get(need, f"no {need}")
 
 
 def _run(path: Path, options: EngineOptions, catalogue: Catalogue, selection: RuleSelection,
@@ -91,10 +96,11 @@ def _run(path: Path, options: EngineOptions, catalogue: Catalogue, selection: Ru
     source, violations = open_fmu(path, limits=limits)
     collector.add_stage(violations)
     if source is None:
+        state.info["manifest"] = "not read: the FMU could not be opened"
         return
     with source:
         names = tuple(source.names())
-        model = _read_model(source, names, options, collector, texts)
+        model = _read_model(source, names, options, collector, texts, state)
         manifest = _read_manifest(source, names, options, collector, texts, state)
         if model is not None:
             state.info.update(model_name=model.model_name, fmi_version=model.fmi_version,
@@ -116,13 +122,16 @@ def _run_probe_stage(source, ctx: CheckContext, options: EngineOptions, catalogu
             continue
         missing = [n for n in rule.needs if not have.get(n, False)]
         if missing:
-            state.skipped.add((rule.code, f"no {missing[0]}"))
+            state.skipped.add((rule.code, state.missing(missing[0])))
+            state.info.setdefault("probes", f"not run: {state.missing(missing[0])}")
         else:
             rules.append(rule)
     if not rules:
         return
+    state.info.pop("probes", None)
     if not options.probes:
         state.skipped.update((r.code, "probes turned off (--no-probes)") for r in rules)
+        state.info["probes"] = "not run: probes turned off (--no-probes)"
         return
     from .probes.runner import run_probes  # numpy and the worker machinery only when probing
 
@@ -156,14 +165,29 @@ def _read_xml(source, name: str, collector: Collector, texts: dict[str, bytes]):
     return tree
 
 
+def _not_read(source, name: str, need: str, info_key: str, state: _State) -> bool:
+    """Whether ``name`` is in the FMU but was left out by an archive finding (too large, unsafe):
+    then it is "not read because of" that finding, not missing."""
+    rule = source.excluded().get(name)
+    if rule is None:
+        return False
+    state.unread[need] = f"{name} not read because of {rule}"
+    state.info[info_key] = f"not read because of {rule}"
+    return True
+
+
 def _read_model(source, names: Sequence[str], options: EngineOptions, collector: Collector,
-                texts: dict[str, bytes]) -> ModelDescription | None:
+                texts: dict[str, bytes], state: _State) -> ModelDescription | None:
     if MODEL_DESCRIPTION not in names:
-        collector.emit("model-description-missing", Violation(
-            "the FMU has no modelDescription.xml at its root", Location(file=MODEL_DESCRIPTION)))
+        if not _not_read(source, MODEL_DESCRIPTION, "model-description", "modelDescription",
+                         state):
+            collector.emit("model-description-missing", Violation(
+                "the FMU has no modelDescription.xml at its root",
+                Location(file=MODEL_DESCRIPTION)))
         return None
     tree = _read_xml(source, MODEL_DESCRIPTION, collector, texts)
     if tree is None:
+        state.unread["model-description"] = f"{MODEL_DESCRIPTION} cannot be read or parsed"
         return None
     if not options.probes_only:
         collector.add_stage(validate_model_description(tree))
@@ -173,6 +197,8 @@ def _read_model(source, names: Sequence[str], options: EngineOptions, collector:
 def _read_manifest(source, names: Sequence[str], options: EngineOptions, collector: Collector,
                    texts: dict[str, bytes], state: _State) -> Manifest | None:
     if MANIFEST not in names:
+        if _not_read(source, MANIFEST, "manifest", "manifest", state):
+            return None
         collector.emit("manifest-missing", Violation(
             f"no {MANIFEST}: this is an ordinary Model Exchange FMU, the DAE rules are skipped",
             Location(file=MANIFEST)))
@@ -180,6 +206,7 @@ def _read_manifest(source, names: Sequence[str], options: EngineOptions, collect
     tree = _read_xml(source, MANIFEST, collector, texts)
     if tree is None:
         state.info["manifest"] = "unreadable: nothing to check or probe"
+        state.unread["manifest"] = "the manifest cannot be read or parsed"
         return None
     draft = detect_draft(tree.getroot()) if options.draft == "auto" else options.draft
     state.draft = draft
@@ -200,7 +227,7 @@ def _run_static(ctx: CheckContext, catalogue: Catalogue, selection: RuleSelectio
             continue
         missing = [n for n in rule.needs if not have.get(n, False)]
         if missing:
-            state.skipped.add((rule.code, f"no {missing[0]}"))
+            state.skipped.add((rule.code, state.missing(missing[0])))
             continue
         if ctx.manifest is not None and not rule.applies_to(ctx.draft):
             state.skipped.add((rule.code, f"does not apply to draft {ctx.draft}"))

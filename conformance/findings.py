@@ -129,6 +129,16 @@ class FmuReport:
     def worst(self) -> Severity | None:
         return max((f.severity for f in self.findings), default=None)
 
+    @property
+    def binary_not_checked(self) -> str | None:
+        """Why the probes did not run on this FMU's binary (``info["probes"]``), or None when
+        they ran: every reporter says it, so that a clean result is never taken for a verified
+        binary."""
+        text = dict(self.info).get("probes")
+        if isinstance(text, str) and text.startswith("not run"):
+            return text.removeprefix("not run").lstrip(": ") or "not run"
+        return None
+
 
 @dataclass(frozen=True, slots=True)
 class Report:

@@ -24,8 +24,11 @@ def render(report: Report, catalogue: Catalogue | None = None, *, color: bool = 
         out.extend(_fmu(fmu, color, measured))
     errors = sum(f.count(Severity.ERROR) for f in report.fmus)
     warnings = sum(f.count(Severity.WARNING) for f in report.fmus)
+    unchecked = sum(1 for f in report.fmus if f.binary_not_checked)
+    binaries = (f"; the binary of {_plural(unchecked, 'FMU')} was not checked" if unchecked
+                else "")
     out.append(f"checked {len(report.fmus)} FMU{'s' if len(report.fmus) != 1 else ''}: "
-               f"{_plural(errors, 'error')}, {_plural(warnings, 'warning')}")
+               f"{_plural(errors, 'error')}, {_plural(warnings, 'warning')}{binaries}")
     return "\n".join(out) + "\n"
 
 
@@ -54,6 +57,8 @@ def _fmu(fmu: FmuReport, color: bool, measured: set[str]) -> list[str]:
                f"{_plural(fmu.count(Severity.WARNING), 'warning')}, "
                f"{fmu.count(Severity.INFO)} info")
     lines.append(_paint(summary, _BOLD, color))
+    if fmu.binary_not_checked:
+        lines.append(f"  binary not checked: {fmu.binary_not_checked}")
     lines.append("")
     return lines
 

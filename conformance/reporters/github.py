@@ -115,6 +115,11 @@ def render(report: Report, catalogue: Catalogue | None = None, *, run: RunInfo |
             lines.append(_annotation(fmu, f, root))
         else:
             hidden.append(_plain(fmu, f))
+    for fmu in report.fmus:
+        if fmu.binary_not_checked:
+            lines.append(command("notice", f"{fmu.path}: binary not checked: "
+                                           f"{fmu.binary_not_checked}",
+                                 title="lsdae: binary not checked"))
     if accepted:
         title = f"lsdae: {plural(len(accepted), 'finding')} accepted by the baseline"
         lines += [f"::group::{escape_data(title)}", *accepted, "::endgroup::"]

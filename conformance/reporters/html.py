@@ -160,8 +160,11 @@ def _fmu_section(index: int, fmu: FmuReport, catalogue: Catalogue | None) -> str
                                                             "variables") if k in info]
     out = [f'<section class="fmu" id="fmu-{index}">',
            f'<h2>{escape(fmu.path)} <span class="badge {css}">{escape(verdict)}</span></h2>',
-           f'<p class="meta">{escape(" · ".join(meta))}</p>',
-           f"<h3>Findings ({len(fmu.findings)})</h3>"]
+           f'<p class="meta">{escape(" · ".join(meta))}</p>']
+    if fmu.binary_not_checked:
+        out.append(f'<p class="meta"><strong>Binary not checked:</strong> '
+                   f'{escape(fmu.binary_not_checked)}</p>')
+    out.append(f"<h3>Findings ({len(fmu.findings)})</h3>")
     if fmu.findings:
         out += [_finding(f, catalogue) for f in fmu.findings]
     else:

@@ -125,13 +125,16 @@ def _finding(f: Finding, catalogue: Catalogue | None) -> str:
 
 def _details(fmu: FmuReport, catalogue: Catalogue | None) -> tuple[list[str], list[str]]:
     """The FMU's heading block, and one line per finding (in severity order)."""
-    head = [f"### {code(fmu.path)}: {verdict(fmu)}", ""]
+    unchecked = ", binary not checked" if fmu.binary_not_checked else ""
+    head = [f"### {code(fmu.path)}: {verdict(fmu)}{unchecked}", ""]
     facts = [f"draft: {_draft(fmu)}"]
     info = dict(fmu.info)
     if isinstance(info.get("model_name"), str):
         facts.append(f"model {code(info['model_name'])}")
     facts.append(f"{plural(len(fmu.rules_run), 'rule')} run, {len(fmu.rules_skipped)} skipped")
     head += ["; ".join(facts) + ".", ""]
+    if fmu.binary_not_checked:
+        head += [f"**Binary not checked:** {text(fmu.binary_not_checked)}.", ""]
     if not fmu.findings:
         head += ["No findings.", ""]
     lines: list[str] = []

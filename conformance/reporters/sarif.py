@@ -278,10 +278,16 @@ def _invocation(report: Report) -> dict[str, Any]:
     failures = [(fmu, f) for fmu in report.fmus for f in fmu.findings
                 if f.name == "internal-error"]
     invocation: dict[str, Any] = {"executionSuccessful": not failures}
-    if failures:
-        invocation["toolExecutionNotifications"] = [
-            {"level": "error", "message": {"text": f"{fmu.path}: {f.message}"},
-             "descriptor": {"id": f.code}} for fmu, f in failures]
+    notifications = [
+        {"level": "error", "message": {"text": f"{fmu.path}: {f.message}"},
+         "descriptor": {"id": f.code}} for fmu, f in failures]
+    # A clean result without probes is not a verified binary: say so where SARIF viewers look.
+    notifications += [
+        {"level": "note", "message": {"text": f"{fmu.path}: binary not checked: "
+                                              f"{fmu.binary_not_checked}"}}
+        for fmu in report.fmus if fmu.binary_not_checked]
+    if notifications:
+        invocation["toolExecutionNotifications"] = notifications
     invocation["properties"] = {"options": plain(report.options)}
     return invocation
 

@@ -1,13 +1,16 @@
 """Engine behaviour: selection, severity overrides, grouping, skipping, internal errors."""
 from __future__ import annotations
 
+import dataclasses
+
 import pytest
 
 from conformance import engine
+from conformance.catalogue import Catalogue, default_catalogue
 from conformance.checks import REGISTRY
 from conformance.engine import EngineOptions, check_fmu
 from conformance.findings import Severity, Violation
-from tests.fixturekit import Case, materialise
+from tests.fixturekit import Case, materialise, zip_scene
 
 
 def _scene(tmp_path, **spec):
@@ -94,3 +97,29 @@ def test_unicode_digits_in_value_references_are_findings_not_crashes(tmp_path):
     report = check_fmu(path, options=EngineOptions(probes=False))
     names = {f.name for f in report.findings}
     assert "internal-error" not in names and "algebraic-unknown-vr" in names
+
+
+def _small_members(limit: int):
+    """The default catalogue with archive-too-large's max_member set to ``limit`` bytes."""
+    rules = []
+    for rule in default_catalogue():
+        if rule.name == "archive-too-large":
+            rule = dataclasses.replace(rule, options=tuple(sorted(
+                {**rule.option_values, "max_member": limit}.items())))
+        rules.append(rule)
+    return Catalogue(rules)
+
+
+def test_a_file_left_out_by_an_archive_limit_is_not_read_not_missing(tmp_path):
+    """modelDescription.xml over the size limit: archive-too-large, and the file is "not read
+    because of" it -- not model-description-missing; the rules that need it say so."""
+    fmu = zip_scene("HelloWorldDAE", tmp_path / "big.fmu")
+    report = engine.check_fmu(fmu, options=engine.EngineOptions(probes=False),
+                              catalogue=_small_members(1500))
+    names = {f.name for f in report.findings}
+    assert "archive-too-large" in names
+    assert "model-description-missing" not in names
+    info = dict(report.info)
+    assert info["modelDescription"] == "not read because of archive-too-large"
+    reasons = dict(report.rules_skipped)
+    assert reasons["DAE501"] == "modelDescription.xml not read because of archive-too-large"

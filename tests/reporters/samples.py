@@ -105,7 +105,7 @@ def sample_report() -> Report:
         rules_run=(),
         rules_skipped=(("DAE201", "no manifest"), ("DAE301", "no manifest"),
                        ("DAE701", "no manifest")),
-        info=evidence(model_name="Plain"),
+        info=evidence(model_name="Plain", probes="not run: no manifest"),
     )
     crashy = FmuReport(
         path="models/Crashy.fmu", draft="alpha1",

@@ -38,9 +38,19 @@ def test_all_ci_formats_in_one_run(tmp_path, monkeypatch):
         "bad/fmu/modelDescription.xml")
     assert load_sarif_file(str(out / "r.sarif")).get_result_count() == errors
     commands, _ = parse((out / "r.txt").read_text())
-    assert [c.kind for c in commands] == ["error"] * errors
+    assert [c.kind for c in commands] == ["error"] * errors + ["notice"] * 2
     assert commands[0].properties["file"] == "bad/fmu/modelDescription.xml"
     assert "| `bad/fmu` | fail |" in (out / "r.md").read_text()
+    # --no-probes: no format lets a clean result pass for a checked binary
+    unchecked = "binary not checked: probes turned off (--no-probes)"
+    assert [c.message for c in commands[errors:]] == [f"bad/fmu: {unchecked}",
+                                                      f"good/fmu: {unchecked}"]
+    assert (out / "r.md").read_text().count("Binary not checked:** probes turned off") == 2
+    notes = log["runs"][0]["invocations"][0]["toolExecutionNotifications"]
+    assert [n["message"]["text"] for n in notes] == [f"bad/fmu: {unchecked}",
+                                                     f"good/fmu: {unchecked}"]
+    skipped = [case for suite in xml for case in suite if case.is_skipped]
+    assert {case.name.split()[0] for case in skipped} >= {"DAE720", "DAE740", "DAE801"}
 
 
 def test_every_format_is_documented():

@@ -223,3 +223,13 @@ def test_no_simulation_no_section():
     page = render(Report(tool_version="0", fmus=(FmuReport(path="a.fmu", draft=None,
                                                              findings=()),)))
     assert "<h3>Simulation</h3>" not in page
+
+
+def test_an_fmu_whose_binary_was_not_checked_says_why():
+    checked = FmuReport(path="a.fmu", draft="alpha1", findings=(), rules_run=("DAE701",))
+    unchecked = FmuReport(path="b.fmu", draft="alpha1", findings=(),
+                          info=evidence(probes="not run: no binary for x86_64-linux"))
+    page = render(Report(tool_version="1", fmus=(checked, unchecked)), CATALOGUE)
+    assert page.count("Binary not checked:") == 1
+    section = page[page.index('id="fmu-2"'):]
+    assert "Binary not checked:</strong> no binary for x86_64-linux" in section

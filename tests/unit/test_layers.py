@@ -27,7 +27,7 @@ FLOORS: list[tuple[str, ...]] = [
      "archive_base", "schemas", "schema_messages", "xmlsafe", "manifest", "reporters", "ruledocs",
      "baseline"),
     ("drafts", "catalogue", "config"),
-    ("numerics", "model", "bipartite", "matching", "dulmage_mendelsohn", "findings", "paths",
+    ("numerics", "model", "unknowns", "bipartite", "matching", "dulmage_mendelsohn", "findings", "paths",
      "progress", "__init__"),
 ]
 

@@ -47,6 +47,7 @@ from .drafts.detect import (
     LS_DAE_ROOT,
     LS_NAMESPACE,
 )
+from .drafts.elements import all_elements, written_name
 from .findings import Location, Violation, evidence
 from .paths import schemas_dir
 from .schema_messages import attribute_of, clean_message
@@ -188,11 +189,11 @@ def validate_model_description(tree: XmlInput, *, file: str = MODEL_DESCRIPTION_
     root = _root_of(tree)
     if etree.QName(root).text != "fmiModelDescription":
         yield Violation(
-            message=f"the root element is <{_written_name(root)}>; an FMI 3.0 modelDescription.xml "
+            message=f"the root element is <{written_name(root)}>; an FMI 3.0 modelDescription.xml "
             "has the root <fmiModelDescription> in no namespace",
-            location=Location(file=file, line=root.sourceline, path="/" + _written_name(root)),
+            location=Location(file=file, line=root.sourceline, path="/" + written_name(root)),
             evidence=evidence(schema=MODEL_DESCRIPTION_XSD),
-            subject="/" + _written_name(root),
+            subject="/" + written_name(root),
             rule=RULE,
         )
         return
@@ -256,7 +257,7 @@ def _run(
 
 
 def _wrong_root(root: etree._Element, draft: str, expected: str, *, file: str, schema_name: str) -> Violation:
-    written = _written_name(root)
+    written = written_name(root)
     namespace = etree.QName(root).namespace
     if draft == ALPHA1 and etree.QName(root).localname == expected:
         message = (
@@ -287,20 +288,8 @@ def _root_of(tree: XmlInput) -> etree._Element:
     return getroot() if getroot is not None else tree
 
 
-def _written_name(element: etree._Element) -> str:
-    """The element name as the author wrote it (with its prefix, if any)."""
-    local = etree.QName(element).localname
-    return f"{element.prefix}:{local}" if element.prefix else local
-
-
-def _elements(root: etree._Element) -> Iterator[etree._Element]:
-    for element in root.iter():
-        if isinstance(element.tag, str):
-            yield element
-
-
 def _has_ls_elements(root: etree._Element) -> bool:
-    return any(etree.QName(e).namespace == LS_NAMESPACE for e in _elements(root))
+    return any(etree.QName(e).namespace == LS_NAMESPACE for e in all_elements(root))
 
 
 def _unqualified_copy(root: etree._Element) -> tuple[etree._Element, list[etree._Element]]:
@@ -310,7 +299,7 @@ def _unqualified_copy(root: etree._Element) -> tuple[etree._Element, list[etree.
     be mapped back to its original line (a copy keeps line numbers only below 65536).
     """
     duplicate = copy.deepcopy(root)
-    for element in _elements(duplicate):
+    for element in all_elements(duplicate):
         qname = etree.QName(element)
         if qname.namespace == LS_NAMESPACE:
             element.tag = qname.localname

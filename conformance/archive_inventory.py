@@ -28,7 +28,8 @@ class ScanResult:
     """What :func:`~conformance.archive_scan.scan` found; ``kind`` is None when nothing is usable.
 
     For a ZIP archive ``zf`` is the open archive, which the caller must close (an
-    :class:`~conformance.fmu.FmuSource` takes it over); for a folder ``root`` is its real path.
+    :class:`~conformance.archive_source.FmuSource` takes it over); for a folder ``root`` is its
+    real path.
     """
 
     kind: str | None

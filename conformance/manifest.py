@@ -3,7 +3,7 @@
 Every shape in the wild (see conformance/drafts/) is normalised into one :class:`Manifest`:
 element names are compared by local name, so namespaced legacy manifests read the same as
 alpha.1 ones; a legacy ``<Residual><Formulation .../></Residual>`` becomes a Residual
-:class:`~conformance.model.Unknown` whose ``formulations`` counts the Formulation children.
+:class:`~conformance.unknowns.Unknown` whose ``formulations`` counts the Formulation children.
 The shape itself is reported by the draft rules; the semantic rules then run on this model.
 """
 from __future__ import annotations
@@ -15,7 +15,7 @@ from typing import NamedTuple
 from lxml import etree
 
 from .drafts.detect import LS_NAMESPACE
-from .model import Unknown, parse_uint, parse_unknown
+from .unknowns import Unknown, parse_uint, parse_unknown
 
 MANIFEST = "extra/org.fmi-standard.fmi-ls-dae/fmi-ls-manifest.xml"
 LS_ATTRIBUTES = ("fmi-ls-name", "fmi-ls-version", "fmi-ls-description")

@@ -3,7 +3,8 @@
 Parsing is lenient: whatever the XSD says about a document, we build as much of the model as we
 can, so the semantic rules still run and report. Values that are missing or malformed become
 ``None`` (the schema stage reports them). Defaults from the FMI 3.0 prose (MV-11, MV-20) are
-applied here once, so every check sees the effective causality, variability and initial.
+applied here once, so every check sees the effective causality, variability and initial. The
+ModelStructure elements are :class:`~conformance.unknowns.Unknown`, as in the manifest.
 """
 from __future__ import annotations
 
@@ -11,6 +12,8 @@ from dataclasses import dataclass, field
 from typing import Iterator, Mapping, NamedTuple
 
 from lxml import etree
+
+from .unknowns import Unknown, parse_uint, parse_unknown
 
 MODEL_DESCRIPTION = "modelDescription.xml"
 
@@ -69,21 +72,6 @@ class Variable(NamedTuple):
     @property
     def label(self) -> str:
         return f"'{self.name}' (valueReference {self.vr})" if self.vr is not None else f"'{self.name}'"
-
-
-class Unknown(NamedTuple):
-    """An element of a ModelStructure (core or manifest): Output, Residual, ..."""
-
-    kind: str
-    vr: int | None
-    dependencies: tuple[int, ...] | None      # None: attribute absent ("depends on all")
-    dependencies_kind: tuple[str, ...] | None
-    line: int | None
-    file: str
-    path: str
-    bad_tokens: tuple[str, ...] = ()          # dependency tokens that are not integers
-    index: str | None = None                  # legacy `index` attribute
-    formulations: int = 0                     # legacy: number of <Formulation> children
 
 
 @dataclass(frozen=True, slots=True)
@@ -176,44 +164,6 @@ def default_initial(causality: str, variability: str) -> str | None:
     if causality in ("output", "local"):
         return "calculated"
     return None
-
-
-def parse_uint(text: str | None) -> int | None:
-    """An unsigned integer attribute, or None (str.isdigit alone admits '²', which int refuses)."""
-    if text is None:
-        return None
-    text = text.strip()
-    return int(text) if text.isascii() and text.isdigit() else None
-
-
-def parse_unknown(el: etree._Element, kind: str, file: str, path: str,
-                  attrs: Mapping[str, str] | None = None) -> Unknown:
-    """Read valueReference / dependencies / dependenciesKind of a structure element."""
-    a = el.attrib if attrs is None else attrs
-    deps_text = a.get("dependencies")
-    deps: tuple[int, ...] | None = None
-    bad: list[str] = []
-    if deps_text is not None:
-        tokens = deps_text.split()
-        joined = "".join(tokens)
-        if not joined or (joined.isascii() and joined.isdigit()):  # the common case, fast
-            deps = tuple(map(int, tokens))
-        else:
-            values = []
-            for token in tokens:
-                if token.isascii() and token.isdigit():
-                    values.append(int(token))
-                else:
-                    bad.append(token)
-            deps = tuple(values)
-    kinds_text = a.get("dependenciesKind")
-    kinds = tuple(kinds_text.split()) if kinds_text is not None else None
-    raw_vr = a.get("valueReference")
-    vr = int(raw_vr) if raw_vr is not None and raw_vr.isascii() and raw_vr.isdigit() \
-        else parse_uint(raw_vr)
-    return Unknown(kind=kind, vr=vr, dependencies=deps,
-                   dependencies_kind=kinds, line=el.sourceline, file=file, path=path,
-                   bad_tokens=tuple(bad), index=a.get("index"))
 
 
 _DEFAULTS: dict[tuple[str, str, str | None], tuple[str, str | None]] = {}

@@ -1,18 +1,9 @@
 """XML Schema validation of modelDescription.xml and of the fmi-ls-dae manifest.
 
 Both use lxml (libxml2): it validates an 18 MB modelDescription in a fraction of a second,
-and its error log gives a line and an XPath for every error, which is all a finding needs.
-
-Where the schemas come from:
-
-- ``modelDescription.xml``: ``fmi3ModelDescription.xsd`` of the FMI 3.0 core, read at run time
-  from the installed fmpy package (``fmpy/schema/fmi3``); never copied, never fetched.
-- the manifest: ``schemas/fmi-ls-dae-<draft>.xsd`` (ours, one per draft). They reference the core
-  schemas through the virtual location ``fmi-core/<file>.xsd``, which the resolver below maps to
-  the same fmpy folder.
-
-Loading never touches the network: every schema document is parsed with ``no_network=True`` and a
-resolver that raises :class:`SchemaLoadError` for any http(s)/ftp location instead of fetching it.
+and its error log gives a line and an XPath for every error, which is all a finding needs. The
+schemas are located and loaded, offline, by :mod:`conformance.schema_loader`: the FMI 3.0 core
+schema from the installed fmpy, ours from ``schemas/`` (one per draft).
 
 Legacy manifests may put their elements in the layered-standard namespace (as default namespace or
 with the ``fmi-ls:`` prefix) or leave them unqualified. Their schemas describe unqualified elements
@@ -27,12 +18,7 @@ and once for the list) is dropped.
 from __future__ import annotations
 
 import copy
-import functools
-import importlib.util
-import logging
-import re
 import threading
-from pathlib import Path
 from typing import Iterator, Union
 
 from lxml import etree
@@ -47,24 +33,18 @@ from .drafts.detect import (
     LS_DAE_ROOT,
     LS_NAMESPACE,
 )
+from .drafts.elements import all_elements, written_name
 from .findings import Location, Violation, evidence
-from .paths import schemas_dir
+from .schema_loader import (
+    MODEL_DESCRIPTION_XSD,
+    SCHEMA_FILES,
+    manifest_schema,
+    model_description_schema,
+)
 from .schema_messages import attribute_of, clean_message
-
-log = logging.getLogger(__name__)
 
 RULE = "schema-violation"
 MODEL_DESCRIPTION_FILE = "modelDescription.xml"
-MODEL_DESCRIPTION_XSD = "fmi3ModelDescription.xsd"
-
-#: Our schema file for each draft id (in the ``schemas/`` folder).
-SCHEMA_FILES: dict[str, str] = {
-    ALPHA1: "fmi-ls-dae-alpha1.xsd",
-    FORMULATION: "fmi-ls-dae-formulation.xsd",
-    LS_DAE_ROOT: "fmi-ls-dae-ls-dae-root.xsd",
-    FLAT_INDEX: "fmi-ls-dae-flat-index.xsd",
-    ATTRIBUTES_ONLY: "fmi-ls-dae-attributes-only.xsd",
-}
 
 #: The local name of the root each draft's schema accepts (legacy roots may also be in the ls namespace).
 EXPECTED_ROOTS: dict[str, str] = {
@@ -75,106 +55,8 @@ EXPECTED_ROOTS: dict[str, str] = {
     ATTRIBUTES_ONLY: "fmi-dae",
 }
 
-_CORE_PREFIX = "fmi-core/"
-_REMOTE = re.compile(r"^[a-zA-Z][a-zA-Z0-9+.-]*://")
-
 XmlInput = Union["etree._ElementTree", "etree._Element"]
 
-
-class SchemaLoadError(RuntimeError):
-    """A schema could not be loaded: a file is missing, fmpy is absent, or a remote URL was asked for."""
-
-
-# --------------------------------------------------------------------------------------------
-# Locating and loading schemas
-
-
-def schema_dir() -> Path:
-    """The folder holding our per-draft XSDs (``schemas/``, or ``conformance/_schemas`` in a wheel)."""
-    folder = schemas_dir()
-    if not (folder / SCHEMA_FILES[ALPHA1]).is_file():
-        raise SchemaLoadError(f"the lsdae schemas are missing from {folder}")
-    return folder
-
-
-def core_schema_dir() -> Path:
-    """The FMI 3.0 core schemas installed with fmpy (``fmpy/schema/fmi3``), found without importing fmpy."""
-    spec = importlib.util.find_spec("fmpy")
-    if spec is None or not spec.submodule_search_locations:
-        raise SchemaLoadError("fmpy is not installed; lsdae reads the FMI 3.0 core schemas from it")
-    folder = Path(next(iter(spec.submodule_search_locations))) / "schema" / "fmi3"
-    if not (folder / MODEL_DESCRIPTION_XSD).is_file():
-        raise SchemaLoadError(f"the FMI 3.0 core schemas are missing from {folder}")
-    return folder
-
-
-class _OfflineResolver(etree.Resolver):
-    """Maps ``.../fmi-core/<file>.xsd`` to fmpy's core schemas and refuses every remote URL."""
-
-    def __init__(self, core: Path) -> None:
-        super().__init__()
-        self.core = core
-        self.refused: list[str] = []
-
-    def resolve(self, system_url: str | None, public_id: str | None, context: object) -> object:
-        url = system_url or ""
-        if _REMOTE.match(url) and not url.startswith("file://"):
-            self.refused.append(url)
-            raise SchemaLoadError(f"refused to fetch {url}: lsdae never uses the network")
-        marker = url.replace("\\", "/").rfind("/" + _CORE_PREFIX)
-        if marker >= 0 or url.startswith(_CORE_PREFIX):
-            name = url[marker + 1 + len(_CORE_PREFIX):] if marker >= 0 else url[len(_CORE_PREFIX):]
-            target = self.core / name
-            if "/" in name or not target.is_file():
-                raise SchemaLoadError(f"no FMI core schema {name!r} in {self.core}")
-            return self.resolve_filename(str(target), context)
-        return None  # a local file next to the including schema: let libxml2 read it
-
-
-def _load_schema(path: Path) -> etree.XMLSchema:
-    """Parse one XSD (and everything it includes or imports) offline."""
-    resolver = _OfflineResolver(core_schema_dir())
-    parser = etree.XMLParser(no_network=True, resolve_entities=False, load_dtd=False)
-    parser.resolvers.add(resolver)
-    try:
-        document = etree.parse(str(path), parser)
-        schema = etree.XMLSchema(document)
-    except (etree.XMLSchemaParseError, etree.XMLSyntaxError, OSError) as exc:
-        if resolver.refused:
-            raise SchemaLoadError(
-                f"{path.name}: refused to fetch {resolver.refused[0]}: lsdae never uses the network"
-            ) from exc
-        raise SchemaLoadError(f"{path.name}: {exc}") from exc
-    if resolver.refused:  # libxml2 may carry on after a failed import; we do not
-        raise SchemaLoadError(f"{path.name}: refused to fetch {resolver.refused[0]}")
-    log.debug("loaded schema %s", path)
-    return schema
-
-
-@functools.lru_cache(maxsize=None)
-def model_description_schema() -> etree.XMLSchema:
-    """``fmi3ModelDescription.xsd`` from fmpy, loaded once per process."""
-    return _load_schema(core_schema_dir() / MODEL_DESCRIPTION_XSD)
-
-
-@functools.lru_cache(maxsize=None)
-def manifest_schema(draft: str) -> etree.XMLSchema:
-    """Our XSD for a draft id of :mod:`conformance.drafts.detect`, loaded once per process."""
-    try:
-        name = SCHEMA_FILES[draft]
-    except KeyError:
-        raise ValueError(f"no schema for draft {draft!r}") from None
-    return _load_schema(schema_dir() / name)
-
-
-def clear_schema_cache() -> None:
-    """Forget every loaded schema (tests use this to prove that loading stays offline)."""
-    model_description_schema.cache_clear()
-    manifest_schema.cache_clear()
-
-
-# --------------------------------------------------------------------------------------------
-# Validation
 
 # lxml's XMLSchema keeps the last run's error log on the object; one lock keeps runs apart.
 _VALIDATE_LOCK = threading.Lock()
@@ -188,11 +70,11 @@ def validate_model_description(tree: XmlInput, *, file: str = MODEL_DESCRIPTION_
     root = _root_of(tree)
     if etree.QName(root).text != "fmiModelDescription":
         yield Violation(
-            message=f"the root element is <{_written_name(root)}>; an FMI 3.0 modelDescription.xml "
+            message=f"the root element is <{written_name(root)}>; an FMI 3.0 modelDescription.xml "
             "has the root <fmiModelDescription> in no namespace",
-            location=Location(file=file, line=root.sourceline, path="/" + _written_name(root)),
+            location=Location(file=file, line=root.sourceline, path="/" + written_name(root)),
             evidence=evidence(schema=MODEL_DESCRIPTION_XSD),
-            subject="/" + _written_name(root),
+            subject="/" + written_name(root),
             rule=RULE,
         )
         return
@@ -256,7 +138,7 @@ def _run(
 
 
 def _wrong_root(root: etree._Element, draft: str, expected: str, *, file: str, schema_name: str) -> Violation:
-    written = _written_name(root)
+    written = written_name(root)
     namespace = etree.QName(root).namespace
     if draft == ALPHA1 and etree.QName(root).localname == expected:
         message = (
@@ -287,20 +169,8 @@ def _root_of(tree: XmlInput) -> etree._Element:
     return getroot() if getroot is not None else tree
 
 
-def _written_name(element: etree._Element) -> str:
-    """The element name as the author wrote it (with its prefix, if any)."""
-    local = etree.QName(element).localname
-    return f"{element.prefix}:{local}" if element.prefix else local
-
-
-def _elements(root: etree._Element) -> Iterator[etree._Element]:
-    for element in root.iter():
-        if isinstance(element.tag, str):
-            yield element
-
-
 def _has_ls_elements(root: etree._Element) -> bool:
-    return any(etree.QName(e).namespace == LS_NAMESPACE for e in _elements(root))
+    return any(etree.QName(e).namespace == LS_NAMESPACE for e in all_elements(root))
 
 
 def _unqualified_copy(root: etree._Element) -> tuple[etree._Element, list[etree._Element]]:
@@ -310,7 +180,7 @@ def _unqualified_copy(root: etree._Element) -> tuple[etree._Element, list[etree.
     be mapped back to its original line (a copy keeps line numbers only below 65536).
     """
     duplicate = copy.deepcopy(root)
-    for element in _elements(duplicate):
+    for element in all_elements(duplicate):
         qname = etree.QName(element)
         if qname.namespace == LS_NAMESPACE:
             element.tag = qname.localname
@@ -327,3 +197,4 @@ def _original_line(copy_root: XmlInput, path: str, originals: list[etree._Elemen
         return None
     index = list(_root_of(copy_root).iter()).index(found[0])
     return originals[index].sourceline if index < len(originals) else None
+

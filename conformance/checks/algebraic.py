@@ -18,7 +18,8 @@ from collections.abc import Callable, Iterable, Iterator
 from ..context import Check, CheckContext
 from ..findings import Location, Violation, evidence
 from ..manifest import Manifest, VrRef
-from ..model import ModelDescription, Unknown, Variable, parse_uint
+from ..model import ModelDescription, Variable
+from ..unknowns import Unknown, parse_uint
 from .listing import classified, facts, first_listings, repeats
 
 log = logging.getLogger(__name__)

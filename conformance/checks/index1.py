@@ -17,7 +17,8 @@ from typing import TYPE_CHECKING, Iterable, Iterator, Sequence
 from ..context import Check, CheckContext
 from ..findings import Location, Violation, evidence
 from ..manifest import VrRef
-from ..model import ModelDescription, Unknown, Variable
+from ..model import ModelDescription, Variable
+from ..unknowns import Unknown
 
 if TYPE_CHECKING:
     from ..dulmage_mendelsohn import DulmageMendelsohn

@@ -1,7 +1,7 @@
 """Shared steps of the rules on the manifest's variable lists (AlgebraicVariables, Residuals).
 
 Each list entry (a :class:`~conformance.manifest.VrRef` or a Residual
-:class:`~conformance.model.Unknown`) names a variable by value reference. The rules on a list
+:class:`~conformance.unknowns.Unknown`) names a variable by value reference. The rules on a list
 partition its faults: unresolved entries, repeated entries, then one class of problem per
 variable. The steps they share live here, so both families resolve and classify alike.
 """
@@ -11,7 +11,8 @@ from typing import Callable, Iterable, Iterator, Sequence, TypeVar
 
 from ..context import CheckContext
 from ..manifest import VrRef
-from ..model import ModelDescription, Unknown, Variable
+from ..model import ModelDescription, Variable
+from ..unknowns import Unknown
 
 Entry = TypeVar("Entry", VrRef, Unknown)
 Classes = dict[str | None, list[tuple[Entry, Variable]]]

@@ -15,7 +15,8 @@ from typing import Iterator
 from ..context import Check, CheckContext
 from ..drafts.detect import FORMULATION, LS_DAE_ROOT
 from ..findings import Location, Violation, evidence
-from ..model import ModelDescription, Unknown, Variable
+from ..model import ModelDescription, Variable
+from ..unknowns import Unknown
 from .dae_roles import DaeRoles, describe
 
 log = logging.getLogger(__name__)

@@ -12,7 +12,7 @@ from typing import Iterator
 
 from ..context import Check, CheckContext
 from ..findings import Location, Violation, evidence
-from ..model import Unknown
+from ..unknowns import Unknown
 from .dae_roles import DaeRoles, describe
 
 

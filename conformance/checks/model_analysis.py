@@ -12,7 +12,8 @@ import weakref
 from typing import Optional
 
 from ..findings import Location
-from ..model import FLOAT_TYPES, ModelDescription, Unknown, Variable
+from ..model import FLOAT_TYPES, ModelDescription, Variable
+from ..unknowns import Unknown
 
 CAUSALITIES = frozenset({"structuralParameter", "parameter", "calculatedParameter", "input",
                          "output", "local", "independent"})

@@ -12,7 +12,8 @@ from collections.abc import Iterator
 
 from ..context import Check, CheckContext
 from ..findings import Location, Violation, evidence
-from ..model import ModelDescription, Unknown, Variable
+from ..model import ModelDescription, Variable
+from ..unknowns import Unknown
 from .model_analysis import analyse, unknown_loc, var_loc
 
 

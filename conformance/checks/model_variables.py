@@ -18,7 +18,8 @@ from typing import Iterator
 
 from ..context import Check, CheckContext
 from ..findings import Location, Violation, evidence
-from ..model import Unknown, Variable
+from ..model import Variable
+from ..unknowns import Unknown
 from .model_analysis import ALLOWED_VARIABILITY, allowed_initial, analyse, unknown_loc, var_loc
 
 

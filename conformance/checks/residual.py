@@ -20,7 +20,8 @@ from collections.abc import Callable, Iterator
 from ..context import Check, CheckContext
 from ..findings import Location, Violation, evidence
 from ..manifest import VrRef
-from ..model import Unknown, Variable
+from ..model import Variable
+from ..unknowns import Unknown
 from .algebraic import continuous_states, element_count, resolved_vrs
 from .listing import classified, facts, first_listings, repeats
 

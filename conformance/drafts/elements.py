@@ -1,4 +1,4 @@
-"""Small lxml helpers that draft detection and migration share: children by local name."""
+"""Small lxml helpers that draft detection, migration and schema validation share."""
 from __future__ import annotations
 
 from typing import Iterator
@@ -29,5 +29,6 @@ def residual_elements(root: etree._Element) -> list[etree._Element]:
 
 
 def written_name(element: etree._Element) -> str:
+    """The element name as the author wrote it (with its prefix, if any)."""
     local = etree.QName(element).localname
     return f"{element.prefix}:{local}" if element.prefix else local

@@ -11,7 +11,8 @@ from conformance.catalogue import default_catalogue
 from conformance.checks import REGISTRY, index1, manifest_dependencies, manifest_lists
 from conformance.context import CheckContext
 from conformance.manifest import MANIFEST, Manifest, VrRef, read_manifest
-from conformance.model import ModelDescription, Unknown, Variable, read_model_description
+from conformance.model import ModelDescription, Variable, read_model_description
+from conformance.unknowns import Unknown
 
 # The HelloWorldDAE model of draft-shapes.md plus variables of every other kind to point at.
 VARIABLES = """

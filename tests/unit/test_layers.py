@@ -24,11 +24,11 @@ FLOORS: list[tuple[str, ...]] = [
     ("simulate",),
     ("runtime", "precommit", "context"),
     ("fmu", "archive_source", "archive_scan", "archive_zip", "archive_folder", "archive_inventory",
-     "archive_base", "schemas", "schema_messages", "xmlsafe", "manifest", "reporters", "ruledocs",
-     "baseline"),
+     "archive_base", "schemas", "schema_loader", "schema_messages", "xmlsafe", "element_path",
+     "manifest", "reporters", "ruledocs", "baseline"),
     ("drafts", "catalogue", "config"),
-    ("numerics", "model", "bipartite", "matching", "dulmage_mendelsohn", "findings", "paths",
-     "progress", "attributes", "__init__"),
+    ("numerics", "model", "unknowns", "bipartite", "matching", "dulmage_mendelsohn", "findings",
+     "paths", "progress", "attributes", "__init__"),
 ]
 
 

@@ -1,4 +1,5 @@
-"""Schema validation of manifests and modelDescription.xml (conformance/schemas.py)."""
+"""Schema validation of manifests and modelDescription.xml (conformance/schemas.py), and loading
+the schemas offline (conformance/schema_loader.py)."""
 from __future__ import annotations
 
 import socket
@@ -8,7 +9,7 @@ from pathlib import Path
 import pytest
 from lxml import etree
 
-from conformance import schemas
+from conformance import schema_loader, schemas
 from conformance.drafts import detect, migrate
 from conformance.findings import Violation
 from conformance.schema_messages import clean_message
@@ -75,14 +76,14 @@ def assert_clean_messages(found: list[Violation]) -> None:
 
 
 def test_every_draft_has_a_schema_file() -> None:
-    assert set(schemas.SCHEMA_FILES) == set(detect.ALL_DRAFTS)
-    for name in schemas.SCHEMA_FILES.values():
-        assert (schemas.schema_dir() / name).is_file()
+    assert set(schema_loader.SCHEMA_FILES) == set(detect.ALL_DRAFTS)
+    for name in schema_loader.SCHEMA_FILES.values():
+        assert (schema_loader.schema_dir() / name).is_file()
 
 
 @pytest.mark.parametrize("draft", detect.ALL_DRAFTS)
 def test_every_schema_loads(draft: str) -> None:
-    assert isinstance(schemas.manifest_schema(draft), etree.XMLSchema)
+    assert isinstance(schema_loader.manifest_schema(draft), etree.XMLSchema)
 
 
 @pytest.mark.parametrize("name", SHAPES)
@@ -222,7 +223,7 @@ def test_model_description_large_file_is_fast_and_keeps_big_line_numbers() -> No
     data = _big_model_description(100_000, bad_at=90_000)
     assert len(data) > 15_000_000
     tree = etree.ElementTree(etree.fromstring(data, etree.XMLParser(huge_tree=True)))
-    schemas.model_description_schema()  # loading is a one-off cost, not part of the budget
+    schema_loader.model_description_schema()  # loading is a one-off cost, not part of the budget
     start = time.perf_counter()
     found = list(schemas.validate_model_description(tree))
     elapsed = time.perf_counter() - start
@@ -251,15 +252,15 @@ def no_network(monkeypatch: pytest.MonkeyPatch) -> list[tuple[object, ...]]:
     monkeypatch.setattr(socket, "socket", refuse)
     monkeypatch.setattr(socket, "create_connection", refuse)
     monkeypatch.setattr(socket, "getaddrinfo", refuse)
-    schemas.clear_schema_cache()
+    schema_loader.clear_schema_cache()
     yield attempts
-    schemas.clear_schema_cache()
+    schema_loader.clear_schema_cache()
 
 
 def test_loading_and_validating_never_touch_the_network(no_network: list[tuple[object, ...]]) -> None:
-    schemas.model_description_schema()
+    schema_loader.model_description_schema()
     for draft in detect.ALL_DRAFTS:
-        schemas.manifest_schema(draft)
+        schema_loader.manifest_schema(draft)
     for name in SHAPES:  # one of them carries an https xsi:schemaLocation
         assert manifest_violations(parse_file(name)) == []
     assert md_violations(MODEL_DESCRIPTION) == []
@@ -273,8 +274,8 @@ def test_remote_schema_location_is_refused(tmp_path: Path, no_network: list[tupl
             '<xs:schema xmlns:xs="http://www.w3.org/2001/XMLSchema">'
             f'<xs:include schemaLocation="{location}"/><xs:element name="r"/></xs:schema>'
         )
-        with pytest.raises(schemas.SchemaLoadError, match="network"):
-            schemas._load_schema(xsd)
+        with pytest.raises(schema_loader.SchemaLoadError, match="network"):
+            schema_loader._load_schema(xsd)
     assert no_network == []
 
 
@@ -285,15 +286,15 @@ def test_virtual_core_location_resolves_to_fmpy(tmp_path: Path) -> None:
         '<xs:include schemaLocation="fmi-core/fmi3VariableDependency.xsd"/>'
         '<xs:element name="r" type="fmi3Unknown"/></xs:schema>'
     )
-    schema = schemas._load_schema(xsd)
+    schema = schema_loader._load_schema(xsd)
     assert schema.validate(etree.fromstring(b'<r valueReference="1"/>'))
     missing = tmp_path / "missing.xsd"
     missing.write_text(
         '<xs:schema xmlns:xs="http://www.w3.org/2001/XMLSchema">'
         '<xs:include schemaLocation="fmi-core/fmi3Nothing.xsd"/></xs:schema>'
     )
-    with pytest.raises(schemas.SchemaLoadError):
-        schemas._load_schema(missing)
+    with pytest.raises(schema_loader.SchemaLoadError):
+        schema_loader._load_schema(missing)
 
 
 def test_clean_message() -> None:

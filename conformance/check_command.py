@@ -19,7 +19,7 @@ from .baseline import write as write_baseline
 from .catalogue import Catalogue, default_catalogue
 from .config import ConfigError, load_config
 from .engine import EngineOptions
-from .exit_codes import EXIT_FINDINGS, EXIT_OK, EXIT_USAGE, UsageError
+from .exit_codes import EXIT_FINDINGS, EXIT_INTERRUPTED, EXIT_OK, EXIT_USAGE, UsageError
 from .findings import Report, RunInfo, Severity
 from .parallel import check_all
 from .precommit import fmu_roots
@@ -143,6 +143,9 @@ def cmd_check(args: argparse.Namespace) -> int:
         raise UsageError(str(exc)) from None
     run = RunInfo(timestamp=started, hostname=socket.gethostname(),
                   durations=tuple(durations.items()))
+    if report.interrupted:
+        print(f"lsdae: interrupted: {len(report.fmus)} of {len(args.paths)} FMUs checked; the "
+              "reports are written for those", file=sys.stderr)
     result = None
     if args.write_baseline:
         try:
@@ -156,6 +159,8 @@ def cmd_check(args: argparse.Namespace) -> int:
     note = _baseline_note(result, args.write_baseline or settings.baseline) if result else ""
     if not _write_outputs(shown, catalogue, outputs, args.color, run, console_note=note):
         return EXIT_USAGE
+    if report.interrupted:
+        return EXIT_INTERRUPTED
     if settings.exit_zero:
         return EXIT_OK
     return exit_code(result.new if result else report, settings.fail_on)

@@ -17,7 +17,7 @@ from .catalogue import CatalogueError
 from .check_command import cmd_check, cmd_precommit
 from .config import FAIL_ON
 from .drafts.detect import ALL_DRAFTS
-from .exit_codes import EXIT_USAGE, UsageError
+from .exit_codes import EXIT_INTERRUPTED, EXIT_USAGE, UsageError
 from .reporters import REPORTER_BY_NAME
 from .rules_command import cmd_explain, cmd_rules
 from . import simulate_command
@@ -120,9 +120,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except CatalogueError as exc:
         print(f"lsdae: the rule catalogue is broken: {exc}", file=sys.stderr)
         return EXIT_USAGE
-    except KeyboardInterrupt:
+    except KeyboardInterrupt:  # outside a run of checks (those write what they finished)
         print("lsdae: interrupted", file=sys.stderr)
-        return EXIT_USAGE
+        return EXIT_INTERRUPTED
     except Exception as exc:  # never a bare traceback
         logging.getLogger(__name__).debug("internal error", exc_info=True)
         print(f"lsdae: internal error: {type(exc).__name__}: {exc} (run with -v for details)",

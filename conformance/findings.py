@@ -147,6 +147,11 @@ class Report:
     tool_version: str
     fmus: tuple[FmuReport, ...]
     options: Evidence = ()
+    not_checked: tuple[str, ...] = ()   # paths left unchecked when the run was interrupted
+
+    @property
+    def interrupted(self) -> bool:
+        return bool(self.not_checked)
 
     def all_findings(self) -> Iterable[Finding]:
         for fmu in self.fmus:

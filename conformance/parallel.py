@@ -60,11 +60,15 @@ def check_all(paths: Sequence[str], *, options: EngineOptions, catalogue: Catalo
                 progress.start(path)
                 results[i] = _guarded(worker, path, options, catalogue)
                 progress.finish(path)
+    except KeyboardInterrupt:  # Ctrl-C: keep what finished, mark the rest as not checked
+        log.info("interrupted after %d of %d FMUs", len(results), len(paths))
     finally:
         progress.close()
+    done = sorted(results)
     if durations is not None:
-        durations.update((paths[i], results[i][1]) for i in range(len(paths)))
-    return replace(skeleton, fmus=tuple(results[i][0] for i in range(len(paths))))
+        durations.update((paths[i], results[i][1]) for i in done)
+    return replace(skeleton, fmus=tuple(results[i][0] for i in done),
+                   not_checked=tuple(p for i, p in enumerate(paths) if i not in results))
 
 
 def _shipped(catalogue: Catalogue) -> Catalogue | None:
@@ -101,7 +105,8 @@ def _pooled(paths: Sequence[str], options: EngineOptions, catalogue: Catalogue, 
                     continue
                 results[i] = outcome
                 progress.finish(paths[i])
-        except BaseException:  # Ctrl-C: do not start what is still queued
+        except BaseException:  # Ctrl-C: start nothing more, stop the running checks now
+            _kill_workers(pool)  # first: shutdown forgets the processes
             pool.shutdown(wait=False, cancel_futures=True)
             raise
     for i in sorted(broken):  # the pool died: find out which FMU killed it
@@ -115,6 +120,16 @@ def _pooled(paths: Sequence[str], options: EngineOptions, catalogue: Catalogue, 
                       "in a native library); run without -j to see more", options,
             catalogue), 0.0)
         progress.finish(paths[i])
+
+
+def _kill_workers(pool: ProcessPoolExecutor) -> None:
+    """Kill the pool's processes (a check may run probes for a minute); their own probe workers
+    die with them (they are killed when their parent dies)."""
+    for process in list((getattr(pool, "_processes", None) or {}).values()):
+        try:
+            process.kill()
+        except (OSError, AttributeError):
+            pass
 
 
 def _pool(workers: int) -> ProcessPoolExecutor:

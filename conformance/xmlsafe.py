@@ -129,15 +129,17 @@ def _failure_violations(problems: list[etree._LogEntry], data: bytes, file: str,
     ev = evidence(libxml2=kind)
     entities = _contains(data, "<!ENTITY")
     if entities and any(t in kind for t in _ENTITY_ERRORS):
-        return [Violation("declares entities in a DOCTYPE and expanding them hits the parser's "
-                          f"safety limits ({detail}); entities are never expanded or fetched",
+        return [Violation("declares entities in a DOCTYPE, and the parser stopped at its safety "
+                          f"limits where they are used ({_without_hint(detail)}); lsdae never "
+                          "expands or fetches entities, and the document is not used",
                           at, ev, rule=UNSAFE_CONSTRUCT)]
     if kind.startswith("IO_") and _contains(data, "<!DOCTYPE"):
         return [Violation(f"refers to an external DTD or entity ({detail}); it is never fetched, "
                           "and the document is not used", at, ev, rule=UNSAFE_CONSTRUCT)]
     if kind in _LIMIT_ERRORS:
-        return [Violation(f"exceeds a safety limit of the XML parser ({detail}); the limits are "
-                          "not lifted for untrusted files", at, ev, rule=UNSAFE_CONSTRUCT)]
+        return [Violation(f"exceeds a safety limit of the XML parser ({_without_hint(detail)}); "
+                          "lsdae keeps these limits for every file, so the document is not used",
+                          at, ev, rule=UNSAFE_CONSTRUCT)]
     out = []
     if kind == "ERR_UNSUPPORTED_ENCODING" and not any(v.rule == ENCODING for v in earlier):
         out.append(Violation(f"declares an encoding that cannot be decoded ({detail}); FMI "
@@ -147,6 +149,16 @@ def _failure_violations(problems: list[etree._LogEntry], data: bytes, file: str,
         out.append(Violation("declares entities in a DOCTYPE; entities are never expanded or "
                              "fetched", Location(file=file), rule=UNSAFE_CONSTRUCT))
     return out
+
+
+_HUGE_HINT = re.compile(r"[,;:]?\s*(?:try\s+)?(?:use\s+)?(?:the\s+)?XML_PARSE_HUGE\s*(?:option)?",
+                        re.IGNORECASE)
+
+
+def _without_hint(detail: str) -> str:
+    """libxml2's message without its advice to lift the limit (XML_PARSE_HUGE): lsdae never
+    lifts it, so repeating the advice would only mislead."""
+    return _HUGE_HINT.sub("", detail).strip().rstrip(",;:") or detail
 
 
 def _syntax_violation(err: etree._LogEntry, file: str, *, further: int) -> Violation:

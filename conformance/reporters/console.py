@@ -29,6 +29,10 @@ def render(report: Report, catalogue: Catalogue | None = None, *, color: bool = 
                 else "")
     out.append(f"checked {len(report.fmus)} FMU{'s' if len(report.fmus) != 1 else ''}: "
                f"{_plural(errors, 'error')}, {_plural(warnings, 'warning')}{binaries}")
+    if report.interrupted:
+        more = ", …" if len(report.not_checked) > 3 else ""
+        out.append(f"interrupted: {_plural(len(report.not_checked), 'FMU')} not checked "
+                   f"({', '.join(report.not_checked[:3])}{more})")
     return "\n".join(out) + "\n"
 
 

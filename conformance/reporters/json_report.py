@@ -51,10 +51,13 @@ def fmu_dict(fmu: FmuReport) -> dict[str, Any]:
 
 
 def report_dict(report: Report) -> dict[str, Any]:
-    return {
+    out = {
         "tool": "lsdae", "version": report.tool_version, "schema_version": SCHEMA_VERSION,
         "options": plain(report.options), "fmus": [fmu_dict(f) for f in report.fmus],
     }
+    if report.interrupted:  # Ctrl-C: the FMUs above were checked, these were not
+        out["interrupted"] = {"not_checked": list(report.not_checked)}
+    return out
 
 
 def render(report: Report, catalogue: Catalogue | None = None, **_: Any) -> str:

@@ -163,6 +163,9 @@ def _skipped(fmu: FmuReport) -> list[str]:
 def render(report: Report, catalogue: Catalogue | None = None, *, run: RunInfo | None = None,
            budget: int = BUDGET, **_: Any) -> str:
     out = ["## lsdae: fmi-ls-dae conformance", "", *_table(report), "", _totals(report), ""]
+    if report.interrupted:
+        out += [f"**Interrupted:** {plural(len(report.not_checked), 'FMU')} not checked: "
+                + ", ".join(code(p) for p in report.not_checked[:20]), ""]
     size = sum(len(line.encode()) + 1 for line in out)
     left_out = 0
     for fmu in report.fmus:

@@ -277,7 +277,8 @@ def _result(fmu: FmuReport, finding: Finding, rule_index: int, seen: dict[str, i
 def _invocation(report: Report) -> dict[str, Any]:
     failures = [(fmu, f) for fmu in report.fmus for f in fmu.findings
                 if f.name == "internal-error"]
-    invocation: dict[str, Any] = {"executionSuccessful": not failures}
+    invocation: dict[str, Any] = {"executionSuccessful": not failures
+                                  and not report.interrupted}
     notifications = [
         {"level": "error", "message": {"text": f"{fmu.path}: {f.message}"},
          "descriptor": {"id": f.code}} for fmu, f in failures]
@@ -286,6 +287,9 @@ def _invocation(report: Report) -> dict[str, Any]:
         {"level": "note", "message": {"text": f"{fmu.path}: binary not checked: "
                                               f"{fmu.binary_not_checked}"}}
         for fmu in report.fmus if fmu.binary_not_checked]
+    notifications += [
+        {"level": "error", "message": {"text": f"{path}: not checked, the run was interrupted"}}
+        for path in report.not_checked]
     if notifications:
         invocation["toolExecutionNotifications"] = notifications
     invocation["properties"] = {"options": plain(report.options)}

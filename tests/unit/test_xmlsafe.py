@@ -236,3 +236,17 @@ def test_xml_like_text_never_raises(pieces: list[str], encoding: str) -> None:
 def test_parser_limits_are_kept(data: bytes) -> None:
     tree, violations = parse_xml(data, file="x.xml")
     assert tree is None and rules_of(violations) == {"xml-unsafe-construct"}
+
+
+def test_deep_nesting_is_refused_without_advice_to_lift_the_limit() -> None:
+    data = b"<a>" * 300 + b"</a>" * 300
+    tree, violations = parse_xml(data, file="x.xml")
+    assert tree is None and rules_of(violations) == {"xml-unsafe-construct"}
+    assert all("XML_PARSE_HUGE" not in v.message for v in violations)
+
+
+@pytest.mark.parametrize("where", ["content", "attribute"])
+def test_entity_messages_do_not_contradict_themselves(where: str) -> None:
+    _, violations = parse_xml(_laughs(9, where), file="x.xml")
+    for v in violations:
+        assert not ("never expanded" in v.message and "expanding them" in v.message)

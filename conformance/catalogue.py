@@ -6,7 +6,7 @@ rule applies to, spec references, docs and options. Nothing else in the code bas
 from __future__ import annotations
 
 import sys
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import lru_cache
 from pathlib import Path
 from typing import Any, Iterable, Iterator, Mapping
@@ -130,3 +130,38 @@ def load_catalogue(directory: Path | None = None) -> Catalogue:
 @lru_cache(maxsize=1)
 def default_catalogue() -> Catalogue:
     return load_catalogue()
+
+
+def _same_type(value: Any, default: Any) -> bool:
+    if isinstance(default, bool) or isinstance(value, bool):
+        return isinstance(value, bool) and isinstance(default, bool)
+    if isinstance(default, float):
+        return isinstance(value, (int, float))
+    return isinstance(value, type(default))
+
+
+def with_options(catalogue: Catalogue, overrides: Mapping[str, Mapping[str, Any]]) -> Catalogue:
+    """A copy of ``catalogue`` whose rules take the option values in ``overrides``
+    ({rule code or name: {option: value}}); ValueError for an unknown rule or option, or a
+    value of another type than the option's default."""
+    changed: dict[str, dict[str, Any]] = {}
+    for key, values in overrides.items():
+        rule = catalogue.get(key)
+        if rule is None:
+            raise ValueError(f"no rule {key!r} (see `lsdae rules`)")
+        defaults = rule.option_values
+        for name, value in values.items():
+            if name not in defaults:
+                known = ", ".join(sorted(defaults)) or "none"
+                raise ValueError(f"{rule.code} {rule.name} has no option {name!r} "
+                                 f"(its options: {known})")
+            if not _same_type(value, defaults[name]):
+                raise ValueError(f"{rule.code} {rule.name}: option {name} takes a "
+                                 f"{type(defaults[name]).__name__}, not {value!r}")
+            if isinstance(defaults[name], float) and not isinstance(value, bool):
+                value = float(value)
+            changed.setdefault(rule.code, dict(defaults))[name] = value
+    if not changed:
+        return catalogue
+    return Catalogue(replace(r, options=tuple(sorted(changed[r.code].items())))
+                     if r.code in changed else r for r in catalogue)

@@ -10,13 +10,18 @@ import sys
 from dataclasses import dataclass
 from datetime import datetime, timezone
 from pathlib import Path
-from typing import Sequence
+from typing import Any, Sequence
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
 
 from .baseline import Baseline, BaselineError, BaselineResult
 from .baseline import apply as apply_baseline
 from .baseline import load as load_baseline
 from .baseline import write as write_baseline
-from .catalogue import Catalogue, default_catalogue
+from .catalogue import Catalogue, default_catalogue, with_options
 from .config import ConfigError, load_config
 from .engine import EngineOptions
 from .exit_codes import EXIT_FINDINGS, EXIT_INTERRUPTED, EXIT_OK, EXIT_USAGE, UsageError
@@ -126,9 +131,33 @@ def exit_code(report: Report, fail_on: str) -> int:
     return EXIT_FINDINGS if report.has_at_least(Severity.parse(fail_on)) else EXIT_OK
 
 
+def rule_options(args: argparse.Namespace, config: dict) -> dict[str, dict[str, Any]]:
+    """[tool.lsdae.rule-options], then --rule-option RULE.OPTION=VALUE (the command line wins);
+    a value is read as TOML (``1e-4``, ``true``, ``"text"``)."""
+    out = {rule: dict(values) for rule, values in config.get("rule-options", {}).items()}
+    for item in getattr(args, "rule_option", None) or ():
+        key, sep, text = item.partition("=")
+        rule, dot, name = key.strip().rpartition(".")
+        if not sep or not dot or not rule or not name:
+            raise UsageError(f"--rule-option takes RULE.OPTION=VALUE, not {item!r}")
+        try:
+            value = tomllib.loads(f"v = {text.strip()}")["v"]
+        except tomllib.TOMLDecodeError:
+            value = text.strip()  # a bare word: a string
+        out.setdefault(rule, {})[name.strip()] = value
+    return out
+
+
+def _catalogue(args: argparse.Namespace, config: dict) -> Catalogue:
+    try:
+        return with_options(default_catalogue(), rule_options(args, config))
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+
+
 def cmd_check(args: argparse.Namespace) -> int:
-    catalogue = default_catalogue()
     config = _config(args)
+    catalogue = _catalogue(args, config)
     options = _options(args, config)
     settings = _settings(args, config)
     outputs = _outputs(args)

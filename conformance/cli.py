@@ -23,28 +23,46 @@ from .rules_command import cmd_explain, cmd_rules
 from . import simulate_command
 
 
+EXIT_CODES = """exit codes:
+  0    no finding at the --fail-on severity (default: error) or above
+  1    at least one such finding (findings accepted by --baseline do not count)
+  2    usage error, or an internal error of lsdae (a one-line message, never a traceback)
+  130  interrupted (Ctrl-C): the reports of the FMUs already checked are still written"""
+
+
 def _parser() -> argparse.ArgumentParser:
+    raw = argparse.RawDescriptionHelpFormatter
     parser = argparse.ArgumentParser(
-        prog="lsdae", description="Conformance checker for fmi-ls-dae FMUs.")
+        prog="lsdae", description="Conformance checker for fmi-ls-dae FMUs.",
+        epilog=EXIT_CODES + "\n\n`lsdae COMMAND --help` describes each command.",
+        formatter_class=raw)
     parser.add_argument("--version", action="version", version=f"lsdae {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
 
-    check = sub.add_parser("check", help="check FMUs (.fmu files or unpacked folders)")
-    check.add_argument("paths", nargs="+", metavar="PATH")
+    check = sub.add_parser("check", help="check FMUs (.fmu files or unpacked folders)",
+                           description="Check FMUs: the archive, the XML against the schemas, "
+                                       "the static rules, and the binary with the probes.",
+                           epilog=EXIT_CODES, formatter_class=raw)
+    check.add_argument("paths", nargs="+", metavar="PATH",
+                       help="a .fmu file or an unpacked FMU folder; several are checked in turn")
     _check_arguments(check)
 
     hook = sub.add_parser("pre-commit", help="check the FMUs that changed files belong to "
-                                             "(the pre-commit hook's entry point)")
+                                             "(the pre-commit hook's entry point)",
+                          epilog=EXIT_CODES, formatter_class=raw)
     hook.add_argument("paths", nargs="*", metavar="FILE",
                       help=".fmu files, and modelDescription.xml or fmi-ls-dae manifests of "
                            "unpacked FMU folders")
     _check_arguments(hook)
 
     rules = sub.add_parser("rules", help="list the rules")
-    rules.add_argument("--format", choices=("text", "markdown"), default="text")
+    rules.add_argument("--format", choices=("text", "markdown"), default="text",
+                       help="text: one line per rule (default); markdown: the full rule docs "
+                            "(docs/rules.md is this output)")
 
     explain = sub.add_parser("explain", help="show one rule in full")
-    explain.add_argument("rule", metavar="CODE-or-name")
+    explain.add_argument("rule", metavar="CODE-or-name",
+                         help="a rule code (DAE601) or name (algebraic-jacobian-singular)")
     simulate_command.add_parser(sub)
     return parser
 
@@ -64,7 +82,8 @@ def _check_arguments(check: argparse.ArgumentParser) -> None:
                        help=f"output format ({', '.join(REPORTER_BY_NAME)}), optionally with a "
                             "file; repeatable. Default: console")
     check.add_argument("-o", "--output", metavar="FILE",
-                       help="write the (single) format without a file here")
+                       help="write the report to FILE instead of the terminal (for one --format "
+                            "given without :FILE, e.g. --format json -o report.json)")
     check.add_argument("--select", action="append", metavar="RULES",
                        help="only these rules: codes, names or code prefixes, comma-separated")
     check.add_argument("--ignore", action="append", metavar="RULES", help="skip these rules")
@@ -81,7 +100,12 @@ def _check_arguments(check: argparse.ArgumentParser) -> None:
                        help="seed for the probes' sampled points (recorded in the report)")
     check.add_argument("--config", type=Path, metavar="PYPROJECT",
                        help="read [tool.lsdae] from this file instead of the nearest pyproject")
-    check.add_argument("--color", choices=("auto", "always", "never"), default="auto")
+    check.add_argument("--rule-option", action="append", metavar="RULE.OPTION=VALUE",
+                       help="set a rule's option (see `lsdae explain RULE`), e.g. "
+                            "DAE740.rtol=1e-4; repeatable; also [tool.lsdae.rule-options]")
+    check.add_argument("--color", choices=("auto", "always", "never"), default="auto",
+                       help="colour the console output (default: auto, on a terminal unless "
+                            "NO_COLOR is set)")
     check.add_argument("-v", "--verbose", action="store_true", help="log what the engine does")
     check.add_argument("--fail-on", choices=FAIL_ON, default=None,
                        help="the least severity that makes the exit code 1 (default: error)")

@@ -26,7 +26,7 @@ else:  # pragma: no cover
     import tomli as tomllib
 
 KEYS = {"select", "ignore", "severity", "draft", "probes", "fail-on", "exit-zero", "baseline",
-        "jobs"}
+        "jobs", "rule-options"}
 FAIL_ON = ("error", "warning", "never")
 
 
@@ -74,6 +74,11 @@ def load_config(path: Path | None = None, *, start: Path | None = None) -> FileC
             raise ConfigError(f"{path}: [tool.lsdae] {key} must be a list of strings")
     if "severity" in table and not isinstance(table["severity"], dict):
         raise ConfigError(f"{path}: [tool.lsdae] severity must be a table CODE = \"level\"")
+    if "rule-options" in table and not (
+            isinstance(table["rule-options"], dict)
+            and all(isinstance(v, dict) for v in table["rule-options"].values())):
+        raise ConfigError(f"{path}: [tool.lsdae.rule-options] takes one table per rule, e.g. "
+                          "[tool.lsdae.rule-options.DAE740] rtol = 1e-4")
     values = dict(table)
     _check_run_keys(values, Path(path))
     return FileConfig(Path(path), values)

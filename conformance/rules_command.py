@@ -37,8 +37,24 @@ def explain_text(rule: RuleSpec) -> str:
     parts += ["", "Why it matters:", _indent(rule.rationale), "", "Fails:", _indent(rule.bad),
               "", "Passes:", _indent(rule.good)]
     if rule.options:
-        parts += ["", "Options:"] + [f"    {k} = {v!r}" for k, v in rule.options]
+        name, value = rule.options[0]
+        parts += ["", "Options (defaults):"] + [f"    {k} = {_toml(v)}" for k, v in rule.options]
+        parts += ["", "Set an option on the command line, or in pyproject.toml:",
+                  f"    lsdae check --rule-option {rule.code}.{name}={_toml(value)} ...",
+                  f"    [tool.lsdae.rule-options.{rule.code}]",
+                  f"    {name} = {_toml(value)}"]
     return "\n".join(parts) + "\n"
+
+
+def _toml(value: object) -> str:
+    """A value as it is written in TOML (and on the command line)."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, str):
+        return '"' + value.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(_toml(v) for v in value) + "]"
+    return repr(value)
 
 
 def _indent(text: str) -> str:

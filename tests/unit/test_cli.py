@@ -128,3 +128,37 @@ def test_a_crashing_check_prints_no_traceback(scene, monkeypatch, capsys):
     captured = capsys.readouterr()
     assert "internal-error" in captured.out
     assert "Traceback" not in captured.err + captured.out
+
+
+def _codes(out_file) -> set[str]:
+    return {f["code"] for f in json.loads(out_file.read_text())["fmus"][0]["findings"]}
+
+
+def test_rule_options_from_the_command_line_and_pyproject(scene, tmp_path, monkeypatch, capsys):
+    """A rule's option, set on the command line or in [tool.lsdae.rule-options], changes the
+    verdict: modelDescription.xml (about 1.9 kB) is too large for a 1000-byte member limit."""
+    path = scene()
+    out = tmp_path / "r.json"
+    base = ["check", path, "--no-probes", "--format", "json", "-o", str(out)]
+    monkeypatch.chdir(tmp_path)
+    assert main(base) == 0 and "DAE004" not in _codes(out)
+    assert main([*base, "--rule-option", "DAE004.max_member=1000"]) == 1
+    assert "DAE004" in _codes(out)
+    (tmp_path / "pyproject.toml").write_text(
+        "[tool.lsdae.rule-options.archive-too-large]\nmax_member = 1000\n")
+    assert main(base) == 1 and "DAE004" in _codes(out)
+    # the command line wins over the file
+    assert main([*base, "--rule-option", "archive-too-large.max_member=100000000"]) == 0
+
+
+@pytest.mark.parametrize("option", ["DAE004.no_such_option=1", "NOPE.max_member=1",
+                                    "DAE004.max_member=large", "DAE004max_member=1"])
+def test_bad_rule_option_is_a_usage_error(scene, option, capsys):
+    assert main(["check", scene(), "--no-probes", "--rule-option", option]) == 2
+    assert capsys.readouterr().err.startswith("lsdae: ")
+
+
+def test_explain_says_how_to_set_an_option(capsys):
+    assert main(["explain", "DAE740"]) == 0
+    text = capsys.readouterr().out
+    assert "--rule-option DAE740." in text and "[tool.lsdae.rule-options.DAE740]" in text

@@ -12,8 +12,9 @@ report's ``info["simulation"]``. A crash or hang of the FMU is a ``binary-*`` fi
 traceback. It sits above the engine, beside ``cli``.
 
 Exit codes, as ``fmpy simulate``: 0 the integration reached the stop time and the trajectory was
-written, 1 it failed (with the reason; the trajectory up to where it ended is still written) or
-``--fail-on`` was given and a finding reaches it, 2 usage error. Static findings are summarised
+written, 1 it failed (with the reason; the trajectory up to where it ended is still written), a
+simulation rule found a fault (DAE and ODE mode disagree), or ``--fail-on`` was given and a
+static finding reaches it, 2 usage error. Static findings are summarised
 in one line with a pointer to ``lsdae check``.
 """
 from __future__ import annotations
@@ -155,8 +156,9 @@ def _times(text: str) -> tuple[float, ...]:
 EPILOG = """exit codes:
   0  the integration reached the stop time and the trajectory was written
   1  the integration failed or stopped early (the reason is printed; the trajectory up to
-     where it ended is still written), nothing could be simulated, the output could not be
-     written, or --fail-on was given and a finding reaches it
+     where it ended is still written), the simulation found a fault (with --mode both: the DAE
+     and ODE trajectories differ), nothing could be simulated, the output could not be
+     written, or --fail-on was given and a static finding reaches it
   2  usage error (bad arguments, no such file)
 
 The start time is the DefaultExperiment's startTime (0 without one); the stop time and the
@@ -271,6 +273,8 @@ def run(args: argparse.Namespace) -> int:
               f"{incomplete[0].t_end:.10g} of {incomplete[0].stop_time:g}: "
               f"{incomplete[0].message}", file=sys.stderr)
         return EXIT_FINDINGS
+    if any(f.severity >= Severity.WARNING for f in own):
+        return EXIT_FINDINGS  # the runs' own verdict, e.g. DAE and ODE mode disagree
     if args.fail_on and (report.worst or Severity.INFO) >= Severity.parse(args.fail_on) \
             and report.findings:
         return EXIT_FINDINGS

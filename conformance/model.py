@@ -13,7 +13,7 @@ from typing import Iterator, Mapping, NamedTuple
 
 from lxml import etree
 
-from .unknowns import Unknown, parse_uint, parse_unknown
+from .unknowns import Unknown, parse_unknown, parse_vr
 
 MODEL_DESCRIPTION = "modelDescription.xml"
 
@@ -197,16 +197,16 @@ def _variable(el: etree._Element) -> Variable | None:
     if len(el):
         start = _children_of_variable(el, start, dims, aliases)
     raw_vr = get("valueReference")
-    vr = int(raw_vr) if raw_vr is not None and raw_vr.isascii() and raw_vr.isdigit() else None
+    vr = parse_vr(raw_vr)
     derivative = get("derivative")
     previous = get("previous")
     return Variable(
         get("name", ""), vr, type_, causality, variability, declared_init or initial,
         declared_var, declared_init, start,
-        parse_uint(derivative) if derivative is not None else None,
+        parse_vr(derivative) if derivative is not None else None,
         el.sourceline, tuple(dims), get("nominal"), get("min"), get("max"),
         get("description"), get("reinit", "false") in ("true", "1"), get("clocks"),
-        parse_uint(previous) if previous is not None else None,
+        parse_vr(previous) if previous is not None else None,
         raw_vr if vr is None else None, tuple(aliases),
     )
 
@@ -224,7 +224,7 @@ def _children_of_variable(el: etree._Element, start: str | None, dims: list[Dime
         elif tag == "Alias":
             aliases.append(child.get("name", ""))
         elif tag == "Dimension":
-            dims.append(Dimension(child.get("start"), parse_uint(child.get("valueReference")),
+            dims.append(Dimension(child.get("start"), parse_vr(child.get("valueReference")),
                                   child.sourceline))
     return start if start is not None or not starts else " ".join(starts)
 

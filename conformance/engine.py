@@ -52,6 +52,9 @@ def check_fmu(path: Path, *, options: EngineOptions = EngineOptions(),
         collector.emit("internal-error", Violation(
             f"lsdae failed while checking this FMU: {type(exc).__name__}: {exc}",
             evidence=evidence(exception=type(exc).__name__)))
+        if state.draft is None and state.has_manifest:  # never summarised as "no manifest"
+            state.info.setdefault("manifest", "present, not checked: lsdae failed (see the "
+                                              "internal-error finding)")
     return FmuReport(
         path=display_path or str(path), draft=state.draft, findings=collector.findings(),
         rules_run=tuple(sorted(state.run)), rules_skipped=tuple(sorted(state.skipped)),
@@ -84,6 +87,7 @@ class _State:
         self.skipped: set[tuple[str, str]] = set()
         self.info: dict[str, object] = {}
         self.unread: dict[str, str] = {}  # need -> why the file it stands for was not read
+        self.has_manifest = False
 
     def missing(self, need: str) -> str:
         """Why a rule that needs ``need`` cannot run."""
@@ -100,6 +104,7 @@ def _run(path: Path, options: EngineOptions, catalogue: Catalogue, selection: Ru
         return
     with source:
         names = tuple(source.names())
+        state.has_manifest = MANIFEST in names
         model = _read_model(source, names, options, collector, texts, state)
         manifest = _read_manifest(source, names, options, collector, texts, state)
         if model is not None:

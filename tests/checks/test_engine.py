@@ -123,3 +123,20 @@ def test_a_file_left_out_by_an_archive_limit_is_not_read_not_missing(tmp_path):
     assert info["modelDescription"] == "not read because of archive-too-large"
     reasons = dict(report.rules_skipped)
     assert reasons["DAE501"] == "modelDescription.xml not read because of archive-too-large"
+
+
+def test_a_reader_that_fails_never_calls_a_present_manifest_absent(tmp_path, monkeypatch):
+    """When lsdae itself fails before the manifest is read, the summary says the manifest is
+    there and not checked, and the console never says "no fmi-ls-dae manifest"."""
+    from conformance.findings import Report
+    from conformance.reporters import console
+
+    def broken(*_args, **_kwargs):
+        raise RecursionError("deep")
+
+    monkeypatch.setattr(engine, "read_manifest", broken)
+    report = check_fmu(_scene(tmp_path), options=EngineOptions(probes=False))
+    assert "internal-error" in {f.name for f in report.findings}
+    assert dict(report.info)["manifest"].startswith("present, not checked")
+    text = console.render(Report(tool_version="1", fmus=(report,)))
+    assert "no fmi-ls-dae manifest" not in text

@@ -58,6 +58,7 @@ def check_fmu(path: Path, *, options: EngineOptions = EngineOptions(),
     return FmuReport(
         path=display_path or str(path), draft=state.draft, findings=collector.findings(),
         rules_run=tuple(sorted(state.run)), rules_skipped=tuple(sorted(state.skipped)),
+        rules_not_run=tuple(sorted(state.not_run)),
         info=evidence(state.info),
     )
 
@@ -85,6 +86,7 @@ class _State:
         self.draft: str | None = None
         self.run: set[str] = set()
         self.skipped: set[tuple[str, str]] = set()
+        self.not_run: set[tuple[str, str]] = set()   # skipped although they should have run
         self.info: dict[str, object] = {}
         self.unread: dict[str, str] = {}  # need -> why the file it stands for was not read
         self.has_manifest = False
@@ -92,6 +94,12 @@ class _State:
     def missing(self, need: str) -> str:
         """Why a rule that needs ``need`` cannot run."""
         return self.unread.get(need, f"no {need}")
+
+    def skip_for(self, code: str, need: str) -> None:
+        """Skip a rule for a missing ``need``: a failure when the file is there but unread."""
+        self.skipped.add((code, self.missing(need)))
+        if need in self.unread:
+            self.not_run.add((code, self.missing(need)))
 
 
 def _run(path: Path, options: EngineOptions, catalogue: Catalogue, selection: RuleSelection,
@@ -127,7 +135,7 @@ def _run_probe_stage(source, ctx: CheckContext, options: EngineOptions, catalogu
             continue
         missing = [n for n in rule.needs if not have.get(n, False)]
         if missing:
-            state.skipped.add((rule.code, state.missing(missing[0])))
+            state.skip_for(rule.code, missing[0])
             state.info.setdefault("probes", f"not run: {state.missing(missing[0])}")
         else:
             rules.append(rule)
@@ -145,6 +153,7 @@ def _run_probe_stage(source, ctx: CheckContext, options: EngineOptions, catalogu
         collector.add(catalogue[code], [violation])
     state.run.update(outcome.run)
     state.skipped.update(outcome.skipped)
+    state.not_run.update(outcome.not_run)
     state.info.update(outcome.info)
 
 
@@ -232,7 +241,7 @@ def _run_static(ctx: CheckContext, catalogue: Catalogue, selection: RuleSelectio
             continue
         missing = [n for n in rule.needs if not have.get(n, False)]
         if missing:
-            state.skipped.add((rule.code, state.missing(missing[0])))
+            state.skip_for(rule.code, missing[0])
             continue
         if ctx.manifest is not None and not rule.applies_to(ctx.draft):
             state.skipped.add((rule.code, f"does not apply to draft {ctx.draft}"))

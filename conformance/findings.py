@@ -121,6 +121,9 @@ class FmuReport:
     rules_run: tuple[str, ...] = ()
     rules_skipped: tuple[tuple[str, str], ...] = ()  # (code, reason)
     info: Evidence = ()
+    # the part of rules_skipped that should have run but could not (an earlier failure, a
+    # missing capability, a budget); the rest does not apply (draft, no DAE layer, --no-probes)
+    rules_not_run: tuple[tuple[str, str], ...] = ()
 
     def count(self, severity: Severity) -> int:
         return sum(1 for f in self.findings if f.severity == severity)

@@ -57,27 +57,28 @@ class Driver:
             done = {c for c, _ in self.run.outcome.skipped} | self.run.outcome.run
             self.remaining = [r for r in self.remaining if r.code not in done]
             if result.kind == "end":
-                self.run.skip(self.remaining, "not run: the worker ended early")
+                self.run.skip(self.remaining, "not run: the worker ended early", failed=True)
                 return
             if result.kind == "load-failed":
-                self.run.skip(self.remaining, "the binary cannot be loaded (binary-not-loadable)")
+                self.run.skip(self.remaining, "the binary cannot be loaded (binary-not-loadable)",
+                              failed=True)
                 return
             if result.kind == "fatal" and not self.remaining:
                 return
             if result.kind == "fmu-timeout":
                 self.run.skip(self.remaining, f"the per-FMU time limit of "
-                              f"{self.limits.fmu_seconds:g} s was reached")
+                              f"{self.limits.fmu_seconds:g} s was reached", failed=True)
                 return
             if result.probe in ("setup", ""):
                 self.run.skip(self.remaining, "the worker failed before the probes could run "
-                              "(see the findings)")
+                              "(see the findings)", failed=True)
                 return
             if not self.remaining:
                 return
             restarts += 1
             if restarts > self.limits.max_restarts:
                 self.run.skip(self.remaining, f"not run: the worker was restarted "
-                              f"{self.limits.max_restarts} times")
+                              f"{self.limits.max_restarts} times", failed=True)
                 return
 
     # -- one worker process --------------------------------------------------------------
@@ -169,6 +170,7 @@ class Driver:
         skipped = event.get("skipped")
         if skipped and not violations:
             outcome.skipped.add((code, str(skipped)))
+            outcome.not_run.add((code, str(skipped)))
         else:
             outcome.run.add(code)
         for key, value in (event.get("info") or {}).items():

@@ -71,6 +71,7 @@ class ProbeOutcome:
     violations: list[tuple[str, Violation]] = field(default_factory=list)
     run: set[str] = field(default_factory=set)
     skipped: set[tuple[str, str]] = field(default_factory=set)
+    not_run: set[tuple[str, str]] = field(default_factory=set)   # the failed part of skipped
     info: dict[str, Any] = field(default_factory=dict)
 
 
@@ -101,8 +102,14 @@ class _Run:
         code = rule.code if rule else next(r.code for r in self.runner_rules.values() if r)
         self.outcome.violations.append((code, replace(violation, rule=rule_name)))
 
-    def skip(self, rules: Iterable[RuleSpec], reason: str) -> None:
-        self.outcome.skipped.update((r.code, reason) for r in rules)
+    def skip(self, rules: Iterable[RuleSpec], reason: str, *, failed: bool = False) -> None:
+        """Rules that do not run, and why; ``failed``: they should have run on this FMU but
+        could not (an earlier failure, a missing capability, a budget), which every report
+        lists, rather than not applying to it."""
+        pairs = [(r.code, reason) for r in rules]
+        self.outcome.skipped.update(pairs)
+        if failed:
+            self.outcome.not_run.update(pairs)
 
     def names(self, code: str) -> str:
         if code == "setup":

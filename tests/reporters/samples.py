@@ -117,6 +117,8 @@ def sample_report() -> Report:
                1, evidence(signal="SIGSEGV", call="fmi3GetFloat64")),
         ),
         rules_run=("DAE201", "DAE701"),
+        rules_skipped=(("DAE720", "the worker failed before the probes could run"),),
+        rules_not_run=(("DAE720", "the worker failed before the probes could run"),),
     )
     clean = FmuReport(path="models/Clean.fmu", draft="alpha1", findings=(),
                       rules_run=("DAE201", "DAE203", "DAE301", "DAE701"))

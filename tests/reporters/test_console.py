@@ -4,6 +4,7 @@ from __future__ import annotations
 from conformance.catalogue import default_catalogue
 from conformance.findings import Finding, FmuReport, Location, Report, Severity, evidence
 from conformance.reporters.console import EVIDENCE_ITEMS, render
+from tests.reporters.samples import SAMPLE_CATALOGUE, sample_report
 
 CATALOGUE = default_catalogue()
 
@@ -43,3 +44,11 @@ def test_colour_only_when_asked():
     report = _report(_finding("nan-or-inf", value=float("nan")))
     assert "\033[" not in render(report, CATALOGUE)
     assert "\033[" in render(report, CATALOGUE, color=True)
+
+
+def test_rules_that_could_not_run_are_listed_and_counted():
+    text = render(sample_report(), SAMPLE_CATALOGUE)
+    block = text[text.index("models/Crashy.fmu"):]
+    assert "not run: DAE720" in block and "the worker failed before the probes could run" in block
+    assert "1 rule not run" in block
+    assert text.rstrip().splitlines()[-1].count("1 rule not run") == 1

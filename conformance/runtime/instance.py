@@ -119,6 +119,12 @@ class Instance:
     def enter_event_mode(self) -> None:
         self._fmi("fmi3EnterEventMode")
 
+    def reset(self) -> None:
+        """fmi3Reset: back to Instantiated, start values included (MV-23, DAE-11)."""
+        self._fmi("fmi3Reset")
+        self.initialised = False
+        self.mode = "ode"
+
     def free(self) -> None:
         """Terminate (if initialised) and free the instance; errors here are ignored."""
         if not self.component:

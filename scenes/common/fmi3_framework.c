@@ -42,6 +42,7 @@
  *   DEFECT_FATAL_DIRECTIONAL       fmi3GetDirectionalDerivative returns fmi3Fatal
  *   DEFECT_WRONG_ADJOINT           the adjoint alone doubles d(res[0])/d(w[0]) (DAE mode)
  *   DEFECT_ODE_DAE_INCONSISTENT    ODE mode solves g = 0.05 instead of g = 0
+ *   DEFECT_RESET_KEEPS_SWITCH      fmi3Reset keeps the DAE switch and the first state
  * and for the simulation probes (tests/fixtures/defects/simulation.py), only for t > 0.5:
  *   DEFECT_LATE_JUMP               res[0] jumps by 1 (no event indicator)
  *   DEFECT_LATE_FAST               der[0] gains 1e5 cos(1e5 t)
@@ -1017,6 +1018,16 @@ fmi3Status fmi3Terminate(fmi3Instance instance) {
 
 fmi3Status fmi3Reset(fmi3Instance instance) {
     BEGIN("fmi3Reset", ANY_STATE);
+#ifdef DEFECT_RESET_KEEPS_SWITCH
+    {   /* the DAE switch and the first state survive the reset */
+        fmi3Boolean dae = c->d.dae;
+        double x0 = NX > 0 ? c->x[0] : 0.0;
+        reset_data(c);
+        c->d.dae = dae;
+        if (NX > 0) c->x[0] = x0;
+        return fmi3OK;
+    }
+#endif
     reset_data(c);
     return fmi3OK;
 }

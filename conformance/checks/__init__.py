@@ -10,6 +10,7 @@ from ..context import Check
 from . import (
     algebraic,
     attribute_values,
+    dae_form,
     enable,
     header,
     index1,
@@ -21,7 +22,7 @@ from . import (
 )
 
 REGISTRY: dict[str, Check] = {}
-for _module in (header, enable, algebraic, residual, manifest_dependencies, manifest_lists,
+for _module in (header, enable, algebraic, residual, dae_form, manifest_dependencies, manifest_lists,
                 model_variables, model_structure, attribute_values, index1):
     for _code, _check in _module.CHECKS.items():
         if _code in REGISTRY:  # pragma: no cover - a defect caught by the tests

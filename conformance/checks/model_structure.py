@@ -99,8 +99,12 @@ def model_structure_derivative_missing(ctx: CheckContext) -> Iterator[Violation]
     continuous floats, local or output, and not both outputs (MV-30 allows linking an output to
     the output it is the derivative of without making either a state), and when no listed
     derivative already covers that state.
+
+    Only Model Exchange must list them: a Co-Simulation or Scheduled Execution FMU may leave
+    the list out (FMI 3.0 §2.4.8, InitialUnknown: "if a Co-Simulation FMU does not define the
+    ContinuousStateDerivative elements, ...").
     """
-    if (model := ctx.model) is None:
+    if (model := ctx.model) is None or model.model_exchange is None:
         return
     by_vr = model.by_vr
     listed: set[int] = set()

@@ -383,6 +383,17 @@ def test_state_derivative_not_listed():
     assert v.subject == "der(x)" and ev(v)["state"] == "x"
 
 
+@pytest.mark.parametrize("interface", ['<CoSimulation modelIdentifier="M"/>',
+                                       '<ScheduledExecution modelIdentifier="M"/>'])
+def test_without_model_exchange_state_derivatives_need_not_be_listed(interface):
+    # FMI 3.0 §2.4.8: a Co-Simulation FMU may leave out <ContinuousStateDerivative> (issue 8)
+    structure = ('<Output valueReference="8" dependencies="2"/>'
+                 '<InitialUnknown valueReference="8" dependencies="2"/>')
+    assert run("DAE512", ctx_of(structure=structure, me=interface)) == []
+    both = ME + interface
+    assert subjects("DAE512", ctx_of(structure=structure, me=both)) == ["der(x)"]
+
+
 def test_second_derivative_of_a_listed_state_is_not_a_missing_derivative():
     variables = VARIABLES + '<Float64 name="dx" valueReference="9" derivative="2"/>'
     assert run("DAE512", ctx_of(variables=variables)) == []

@@ -23,6 +23,7 @@ from .drafts.detect import UNKNOWN, detect_draft, unrecognised_violations
 from .drafts.migrate import legacy_violations
 from .findings import Finding, FmuReport, Location, Report, Severity, Violation, evidence
 from .fmu import ArchiveLimits, ArchiveReadError, open_fmu
+from .layer import manifest_missing, skip_reason
 from .manifest import MANIFEST, Manifest, read_manifest
 from .model import MODEL_DESCRIPTION, ModelDescription, read_model_description
 from .schemas import validate_manifest, validate_model_description
@@ -223,7 +224,7 @@ def _run(path: Path, options: EngineOptions, catalogue: Catalogue, selection: Ru
     with source:
         names = tuple(source.names())
         model = _read_model(source, names, options, collector, texts)
-        manifest = _read_manifest(source, names, options, collector, texts, state)
+        manifest = _read_manifest(source, names, options, collector, texts, state, model)
         if model is not None:
             state.info.update(model_name=model.model_name, fmi_version=model.fmi_version,
                               variables=len(model.variables))
@@ -237,14 +238,14 @@ def _run_probe_stage(source, ctx: CheckContext, options: EngineOptions, catalogu
                      selection: RuleSelection, collector: _Collector, state: _State) -> None:
     """Dynamic probes: load the binary in a worker process (conformance.probes)."""
     have = {"model-description": ctx.model is not None, "manifest": ctx.manifest is not None,
+            "dae-layer": ctx.dae_layer,
             "binary": True}  # whether there is a binary for this platform, the runner decides
     rules = []
     for rule in catalogue:
         if rule.stage != "probe" or rule.code not in selection.enabled:
             continue
-        missing = [n for n in rule.needs if not have.get(n, False)]
-        if missing:
-            state.skipped.add((rule.code, f"no {missing[0]}"))
+        if reason := skip_reason(rule.needs, have):
+            state.skipped.add((rule.code, reason))
         else:
             rules.append(rule)
     if not rules:
@@ -299,11 +300,10 @@ def _read_model(source, names: Sequence[str], options: EngineOptions, collector:
 
 
 def _read_manifest(source, names: Sequence[str], options: EngineOptions, collector: _Collector,
-                   texts: dict[str, bytes], state: _State) -> Manifest | None:
+                   texts: dict[str, bytes], state: _State,
+                   model: ModelDescription | None) -> Manifest | None:
     if MANIFEST not in names:
-        collector.emit("manifest-missing", Violation(
-            f"no {MANIFEST}: this is an ordinary Model Exchange FMU, the DAE rules are skipped",
-            Location(file=MANIFEST)))
+        collector.emit("manifest-missing", manifest_missing(model, names))
         return None
     tree = _read_xml(source, MANIFEST, collector, texts)
     if tree is None:
@@ -322,13 +322,13 @@ def _read_manifest(source, names: Sequence[str], options: EngineOptions, collect
 
 def _run_static(ctx: CheckContext, catalogue: Catalogue, selection: RuleSelection,
                 collector: _Collector, state: _State) -> None:
-    have = {"model-description": ctx.model is not None, "manifest": ctx.manifest is not None}
+    have = {"model-description": ctx.model is not None, "manifest": ctx.manifest is not None,
+            "dae-layer": ctx.dae_layer}
     for rule in catalogue:
         if rule.stage not in STATIC_STAGES or rule.code not in selection.enabled:
             continue
-        missing = [n for n in rule.needs if not have.get(n, False)]
-        if missing:
-            state.skipped.add((rule.code, f"no {missing[0]}"))
+        if reason := skip_reason(rule.needs, have):
+            state.skipped.add((rule.code, reason))
             continue
         if ctx.manifest is not None and not rule.applies_to(ctx.draft):
             state.skipped.add((rule.code, f"does not apply to draft {ctx.draft}"))

@@ -165,8 +165,8 @@ def model_structure_initial_unknown_mismatch(ctx: CheckContext) -> Iterator[Viol
 
 def directional_derivatives_missing(ctx: CheckContext) -> Iterator[Violation]:
     """DAE514 CF-05, DAE-50: a DAE FMU should provide directional derivatives for dg/dw."""
-    model, manifest = ctx.model, ctx.manifest
-    if model is None or manifest is None or model.model_exchange is None:
+    model = ctx.model
+    if model is None or not ctx.dae_layer or model.model_exchange is None:
         return
     me = model.model_exchange
     if me.flag("providesDirectionalDerivatives"):

@@ -449,6 +449,13 @@ def test_directional_derivatives_missing_only_with_manifest():
     assert run("DAE514", ctx_of(me=ME, manifest=MANIFEST)) == []
 
 
+def test_directional_derivatives_missing_when_an_enable_parameter_declares_the_layer():
+    variables = VARIABLES.replace('name="dae"', 'name="enableDAEModeParameter"')
+    me = '<ModelExchange modelIdentifier="M"/>'
+    [v] = run("DAE514", ctx_of(me=me, variables=variables))
+    assert v.subject == "M"
+
+
 # --- grouping and speed -----------------------------------------------------------------------
 
 def test_many_equal_faults_share_one_message():

@@ -23,7 +23,7 @@ FLOORS: list[tuple[str, ...]] = [
     ("simulate",),
     ("runtime", "precommit", "context"),
     ("fmu", "schemas", "schema_messages", "xmlsafe", "archive_scan", "archive_base", "manifest",
-     "reporters", "ruledocs", "baseline"),
+     "layer", "reporters", "ruledocs", "baseline"),
     ("drafts", "catalogue", "config"),
     ("numerics", "model", "matching", "findings", "paths", "progress", "__init__"),
 ]

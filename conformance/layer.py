@@ -75,7 +75,7 @@ def manifest_missing(model: ModelDescription | None, names: Sequence[str]) -> Vi
                               layer_declared_by=declaration))
 
 
-def skip_reason(needs: Iterable[str], have: Mapping[str, bool]) -> str | None:
+def skip_reason(needs: Sequence[str], have: Mapping[str, bool]) -> str | None:
     """Why a rule with these ``needs`` cannot run (None: it can).
 
     A rule that needs the manifest or the layer is a layer rule: on an FMU (with a readable

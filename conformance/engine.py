@@ -26,6 +26,7 @@ from .drafts.migrate import legacy_violations
 from .engine_options import EngineOptions, RuleSelection
 from .findings import FmuReport, Location, Report, Violation, evidence
 from .fmu import ArchiveLimits, ArchiveReadError, open_fmu
+from .layer import manifest_missing, skip_reason
 from .manifest import MANIFEST, Manifest, read_manifest
 from .model import MODEL_DESCRIPTION, ModelDescription, read_model_description
 from .schemas import validate_manifest, validate_model_description
@@ -91,15 +92,16 @@ class _State:
         self.unread: dict[str, str] = {}  # need -> why the file it stands for was not read
         self.has_manifest = False
 
-    def missing(self, need: str) -> str:
-        """Why a rule that needs ``need`` cannot run."""
-        return self.unread.get(need, f"no {need}")
-
-    def skip_for(self, code: str, need: str) -> None:
-        """Skip a rule for a missing ``need``: a failure when the file is there but unread."""
-        self.skipped.add((code, self.missing(need)))
-        if need in self.unread:
-            self.not_run.add((code, self.missing(need)))
+    def skip_for(self, code: str, needs, have, reason: str) -> str:
+        """Skip a rule whose ``needs`` are not all there, and return the reason: the layer's
+        ``reason`` -- or, when the file a need stands for is there but was not read, that (a
+        failure, listed as not run)."""
+        missing = [n for n in needs if not have.get(n, False) and n in self.unread]
+        if missing:
+            reason = self.unread[missing[0]]
+            self.not_run.add((code, reason))
+        self.skipped.add((code, reason))
+        return reason
 
 
 def _run(path: Path, options: EngineOptions, catalogue: Catalogue, selection: RuleSelection,
@@ -114,7 +116,7 @@ def _run(path: Path, options: EngineOptions, catalogue: Catalogue, selection: Ru
         names = tuple(source.names())
         state.has_manifest = MANIFEST in names
         model = _read_model(source, names, options, collector, texts, state)
-        manifest = _read_manifest(source, names, options, collector, texts, state)
+        manifest = _read_manifest(source, names, options, collector, texts, state, model)
         if model is not None:
             state.info.update(model_name=model.model_name, fmi_version=model.fmi_version,
                               variables=len(model.variables))
@@ -128,15 +130,15 @@ def _run_probe_stage(source, ctx: CheckContext, options: EngineOptions, catalogu
                      selection: RuleSelection, collector: Collector, state: _State) -> None:
     """Dynamic probes: load the binary in a worker process (conformance.probes)."""
     have = {"model-description": ctx.model is not None, "manifest": ctx.manifest is not None,
+            "dae-layer": ctx.dae_layer,
             "binary": True}  # whether there is a binary for this platform, the runner decides
     rules = []
     for rule in catalogue:
         if rule.stage != "probe" or rule.code not in selection.enabled:
             continue
-        missing = [n for n in rule.needs if not have.get(n, False)]
-        if missing:
-            state.skip_for(rule.code, missing[0])
-            state.info.setdefault("probes", f"not run: {state.missing(missing[0])}")
+        if reason := skip_reason(rule.needs, have):
+            reason = state.skip_for(rule.code, rule.needs, have, reason)
+            state.info.setdefault("probes", f"not run: {reason}")
         else:
             rules.append(rule)
     if not rules:
@@ -209,13 +211,12 @@ def _read_model(source, names: Sequence[str], options: EngineOptions, collector:
 
 
 def _read_manifest(source, names: Sequence[str], options: EngineOptions, collector: Collector,
-                   texts: dict[str, bytes], state: _State) -> Manifest | None:
+                   texts: dict[str, bytes], state: _State,
+                   model: ModelDescription | None) -> Manifest | None:
     if MANIFEST not in names:
         if _not_read(source, MANIFEST, "manifest", "manifest", state):
             return None
-        collector.emit("manifest-missing", Violation(
-            f"no {MANIFEST}: this is an ordinary Model Exchange FMU, the DAE rules are skipped",
-            Location(file=MANIFEST)))
+        collector.emit("manifest-missing", manifest_missing(model, names))
         return None
     tree = _read_xml(source, MANIFEST, collector, texts)
     if tree is None:
@@ -235,13 +236,13 @@ def _read_manifest(source, names: Sequence[str], options: EngineOptions, collect
 
 def _run_static(ctx: CheckContext, catalogue: Catalogue, selection: RuleSelection,
                 collector: Collector, state: _State) -> None:
-    have = {"model-description": ctx.model is not None, "manifest": ctx.manifest is not None}
+    have = {"model-description": ctx.model is not None, "manifest": ctx.manifest is not None,
+            "dae-layer": ctx.dae_layer}
     for rule in catalogue:
         if rule.stage not in STATIC_STAGES or rule.code not in selection.enabled:
             continue
-        missing = [n for n in rule.needs if not have.get(n, False)]
-        if missing:
-            state.skip_for(rule.code, missing[0])
+        if reason := skip_reason(rule.needs, have):
+            state.skip_for(rule.code, rule.needs, have, reason)
             continue
         if ctx.manifest is not None and not rule.applies_to(ctx.draft):
             state.skipped.add((rule.code, f"does not apply to draft {ctx.draft}"))

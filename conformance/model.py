@@ -114,6 +114,7 @@ class ModelDescription:
     structure: tuple[Unknown, ...]
     line: int | None = None
     has_co_simulation: bool = False
+    has_scheduled_execution: bool = False
     default_experiment: DefaultExperiment | None = None
     by_vr: Mapping[int, Variable] = field(default_factory=dict, init=False, repr=False,
                                           compare=False, hash=False)
@@ -272,6 +273,7 @@ def read_model_description(tree: etree._ElementTree, *, file: str = MODEL_DESCRI
         naming_convention=root.get("variableNamingConvention", "flat"),
         model_exchange=me, variables=tuple(variables), structure=tuple(structure),
         line=root.sourceline, has_co_simulation=_first(root, "CoSimulation") is not None,
+        has_scheduled_execution=_first(root, "ScheduledExecution") is not None,
         default_experiment=_default_experiment(_first(root, "DefaultExperiment")),
     )
 

@@ -52,12 +52,24 @@ def counts(model: ModelDescription, manifest: Manifest) -> Counts | None:
     return Counts(states, algebraic, residuals)
 
 
+def _derivative_dependencies(model: ModelDescription, manifest: Manifest) -> list[str]:
+    """Names of state derivatives that residual dependencies list (knowns of the implicit form)."""
+    derivatives = {u.vr for u in model.unknowns("ContinuousStateDerivative")}
+    return sorted({model.by_vr[vr].name for r in manifest.residuals
+                   for vr in (r.dependencies or ()) if vr in derivatives and vr in model.by_vr})
+
+
 def fully_implicit(model: ModelDescription | None, manifest: Manifest | None) -> Counts | None:
-    """The counts when the manifest describes the fully implicit form, else None."""
+    """The counts when the manifest describes the fully implicit form, else None: no
+    <ContinuousStateDerivative>, and as many residual elements as states plus algebraic
+    variables. Without algebraic variables that count is as well a semi-explicit manifest with
+    a residual too many; only residuals that depend on a state derivative then tell."""
     if model is None or manifest is None or manifest.unknowns("ContinuousStateDerivative"):
         return None
     found = counts(model, manifest)
     if found is None or found.states == 0 or found.residuals != found.states + found.algebraic:
+        return None
+    if found.algebraic == 0 and not _derivative_dependencies(model, manifest):
         return None
     return found
 
@@ -76,10 +88,7 @@ def fully_implicit_form(ctx: CheckContext) -> Iterator[Violation]:
         return
     manifest = ctx.manifest
     assert manifest is not None and ctx.model is not None
-    derivatives = {u.vr for u in ctx.model.unknowns("ContinuousStateDerivative")}
-    uses_derivatives = sorted({ctx.model.by_vr[vr].name for r in manifest.residuals
-                               for vr in (r.dependencies or ()) if vr in derivatives
-                               and vr in ctx.model.by_vr})
+    uses_derivatives = _derivative_dependencies(ctx.model, manifest)
     yield Violation(
         f"the manifest describes the fully implicit form 0 = F(der(x), x, w, t): "
         f"{found.residuals} residuals for {found.states} states and {found.algebraic} "

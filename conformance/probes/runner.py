@@ -37,6 +37,7 @@ from typing import Any, Iterable, Sequence
 
 from ..catalogue import RuleSpec, default_catalogue
 from ..findings import Violation
+from ..layer import NOT_A_DAE_FMU
 from ..manifest import MANIFEST
 from ..runtime.host import host_platform_tuple, library_extension
 from .driver import RUNNER_RULES, Driver
@@ -128,7 +129,9 @@ class _Run:
         if ctx.manifest is None:
             if MANIFEST in ctx.names:
                 return "the manifest cannot be parsed: nothing to probe"
-            return "no fmi-ls-dae manifest: an ordinary Model Exchange FMU"
+            if not ctx.dae_layer:
+                return NOT_A_DAE_FMU
+            return f"no {MANIFEST}: nothing to probe"
         me = ctx.model.model_exchange
         if me is None or not me.model_identifier:
             return "the FMU has no <ModelExchange modelIdentifier=...> interface"

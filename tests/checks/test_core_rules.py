@@ -383,6 +383,17 @@ def test_state_derivative_not_listed():
     assert v.subject == "der(x)" and ev(v)["state"] == "x"
 
 
+@pytest.mark.parametrize("interface", ['<CoSimulation modelIdentifier="M"/>',
+                                       '<ScheduledExecution modelIdentifier="M"/>'])
+def test_without_model_exchange_state_derivatives_need_not_be_listed(interface):
+    # FMI 3.0 §2.4.8: a Co-Simulation FMU may leave out <ContinuousStateDerivative> (issue 8)
+    structure = ('<Output valueReference="8" dependencies="2"/>'
+                 '<InitialUnknown valueReference="8" dependencies="2"/>')
+    assert run("DAE512", ctx_of(structure=structure, me=interface)) == []
+    both = ME + interface
+    assert subjects("DAE512", ctx_of(structure=structure, me=both)) == ["der(x)"]
+
+
 def test_second_derivative_of_a_listed_state_is_not_a_missing_derivative():
     variables = VARIABLES + '<Float64 name="dx" valueReference="9" derivative="2"/>'
     assert run("DAE512", ctx_of(variables=variables)) == []
@@ -436,6 +447,13 @@ def test_directional_derivatives_missing_only_with_manifest():
     assert v.subject == "M" and v.location.path == "/fmiModelDescription/ModelExchange"
     assert run("DAE514", ctx_of(me=me)) == []
     assert run("DAE514", ctx_of(me=ME, manifest=MANIFEST)) == []
+
+
+def test_directional_derivatives_missing_when_an_enable_parameter_declares_the_layer():
+    variables = VARIABLES.replace('name="dae"', 'name="enableDAEModeParameter"')
+    me = '<ModelExchange modelIdentifier="M"/>'
+    [v] = run("DAE514", ctx_of(me=me, variables=variables))
+    assert v.subject == "M"
 
 
 # --- grouping and speed -----------------------------------------------------------------------

@@ -10,6 +10,7 @@ from conformance.catalogue import Catalogue, default_catalogue
 from conformance.checks import REGISTRY
 from conformance.engine import EngineOptions, check_fmu
 from conformance.findings import Severity, Violation
+from conformance.layer import NOT_A_DAE_FMU
 from tests.fixturekit import Case, materialise, zip_scene
 
 
@@ -38,7 +39,7 @@ def test_missing_manifest_skips_dae_rules_not_fails(tmp_path):
     report = check_fmu(_scene(tmp_path, remove=["manifest"]), options=EngineOptions(probes=False))
     assert {f.code for f in report.findings} == {"DAE091"}
     assert report.rules_skipped, "DAE rules should be listed as skipped"
-    assert all(reason == "no manifest" for _, reason in report.rules_skipped)
+    assert all(reason == NOT_A_DAE_FMU for _, reason in report.rules_skipped)
 
 
 def test_grouping_many_identical_violations(tmp_path, monkeypatch):

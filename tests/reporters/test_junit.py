@@ -9,6 +9,7 @@ from lxml import etree
 
 from conformance.catalogue import default_catalogue
 from conformance.findings import Report, RunInfo
+from conformance.layer import NOT_A_DAE_FMU
 from conformance.reporters import REPORTER_BY_NAME, json_report, junit
 from tests.reporters.samples import (
     ENGINE_RUN,
@@ -99,9 +100,9 @@ def test_sample_outcomes_per_rule():
     assert isinstance(skipped, Skipped) and skipped.message == "probes turned off (--no-probes)"
     # no manifest: the info finding passes, the DAE rules are skipped with the reason
     assert {c.name: (c.result[0].message if c.result else None) for c in plain} == {
-        "DAE091 manifest-missing": None, "DAE201 enable-parameter-missing": "no manifest",
-        "DAE301 algebraic-variable-unknown-vr": "no manifest",
-        "DAE701 initial-residual-nonzero": "no manifest"}
+        "DAE091 manifest-missing": None, "DAE201 enable-parameter-missing": NOT_A_DAE_FMU,
+        "DAE301 algebraic-variable-unknown-vr": NOT_A_DAE_FMU,
+        "DAE701 initial-residual-nonzero": NOT_A_DAE_FMU}
     # a crash and an internal error are errors, not failures; the rule unknown to the
     # catalogue keeps the finding's name
     kinds = {c.name: type(c.result[0]) for c in crashy

@@ -2,7 +2,6 @@
 model_structure.py, DAE5xx)."""
 from __future__ import annotations
 
-import time
 
 import pytest
 from lxml import etree
@@ -485,9 +484,8 @@ def big_model_xml(n_blocks: int) -> str:
     return md_xml(variables="".join(parts), structure="".join(outputs + structure + initial))
 
 
-def test_big_model_is_clean_and_linear():
+def test_big_model_is_clean():
+    # speed is measured by `make bench` (reports/bench/static.md), never by a timed test
     ctx = ctx_of(big_model_xml(2000), manifest=MANIFEST)
-    t0 = time.perf_counter()
     for code in CHECKS:
         assert run(code, ctx) == [], code
-    assert time.perf_counter() - t0 < 0.5

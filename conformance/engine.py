@@ -171,12 +171,13 @@ def _read(source, name: str, collector: Collector) -> bytes | None:
 
 
 def _read_xml(source, name: str, collector: Collector, texts: dict[str, bytes]):
-    """Read and safely parse one XML member; keep its bytes for source excerpts."""
+    """Read and safely parse one XML member; keep its bytes for source excerpts. The manifest
+    is read as importers read it when its only fault is an undeclared fmi-ls prefix."""
     data = _read(source, name, collector)
     if data is None:
         return None
     texts[name] = data
-    tree, violations = parse_xml(data, file=name)
+    tree, violations = parse_xml(data, file=name, bind_prefixes=name == MANIFEST)
     collector.add_stage(violations)
     return tree
 

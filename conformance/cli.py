@@ -21,7 +21,7 @@ from .baseline import apply as apply_baseline
 from .baseline import load as load_baseline
 from .baseline import write as write_baseline
 from .catalogue import Catalogue, CatalogueError, RuleSpec, default_catalogue
-from .config import FAIL_ON, ConfigError, load_config
+from .config import ENDURANCE_LEVELS, FAIL_ON, ConfigError, load_config
 from .drafts.detect import ALL_DRAFTS, DRAFT_LABELS
 from .engine import EngineOptions
 from .findings import Report, RunInfo, Severity
@@ -102,6 +102,10 @@ def _check_arguments(check: argparse.ArgumentParser) -> None:
                         help="skip the schema and static rules; run the dynamic probes")
     check.add_argument("--seed", type=int, default=0,
                        help="seed for the probes' sampled points (recorded in the report)")
+    check.add_argument("--endurance", choices=ENDURANCE_LEVELS, default=None,
+                       help="endurance probes: thousands of calls on one instance, memory "
+                            "growth, instance independence (default: quick; long: a longer "
+                            "budget; off: skip them)")
     check.add_argument("--config", type=Path, metavar="PYPROJECT",
                        help="read [tool.lsdae] from this file instead of the nearest pyproject")
     check.add_argument("--color", choices=("auto", "always", "never"), default="auto")
@@ -152,6 +156,7 @@ def _options(args: argparse.Namespace, config: dict | None = None) -> EngineOpti
         draft=args.draft or config.get("draft", "auto"),
         probes=not args.no_probes and bool(config.get("probes", True)),
         probes_only=args.probes_only, seed=args.seed,
+        endurance=args.endurance or config.get("endurance", "quick"),
     )
 
 

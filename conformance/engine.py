@@ -47,6 +47,7 @@ class EngineOptions:
     probes_only: bool = False
     seed: int = 0
     group_threshold: int = 3
+    endurance: str = "quick"          # the endurance probes: "off", "quick" or "long"
 
 
 class RuleSelection:
@@ -254,7 +255,7 @@ def _run_probe_stage(source, ctx: CheckContext, options: EngineOptions, catalogu
         return
     from .probes.runner import run_probes  # numpy and the worker machinery only when probing
 
-    outcome = run_probes(source, ctx, rules, seed=options.seed)
+    outcome = run_probes(source, ctx, rules, seed=options.seed, endurance=options.endurance)
     for code, violation in outcome.violations:
         collector.add(catalogue[code], [violation])
     state.run.update(outcome.run)

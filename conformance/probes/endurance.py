@@ -76,12 +76,13 @@ def evaluation_fails_late(ctx: ProbeContext, *, calls_quick: int, calls_long: in
 # ---------------------------------------------------------------------------- memory-grows
 
 
-def memory_grows(ctx: ProbeContext, *, bytes_per_call: float, min_growth_kib: float
-                 ) -> Iterator[Violation]:
+def memory_grows(ctx: ProbeContext, *, bytes_per_call_quick: float, bytes_per_call_long: float,
+                 min_growth_kib: float) -> Iterator[Violation]:
     """The worker's resident memory does not grow with the FMI calls of the path run: the
     least-squares slope over the second half of the samples, and each of its quarters alone,
-    stay below ``bytes_per_call``, or the growth over that half below ``min_growth_kib``."""
-    level_of(ctx)
+    stay below ``bytes_per_call_<level>``, or the growth over that half below
+    ``min_growth_kib``."""
+    bytes_per_call = bytes_per_call_quick if level_of(ctx) == "quick" else bytes_per_call_long
     run = path_run(ctx, RUN_CODES)
     if run.memory_note:
         raise ProbeSkipped(run.memory_note)

@@ -25,6 +25,7 @@ from scenes.build import build_scene
 
 ENDURANCE = ("DAE760", "DAE761", "DAE762")
 LATE_AFTER = 5000      # scenes/common/fmi3_framework.c: calls on one instance before it strikes
+MEMORY_OPTIONS = default_catalogue()["memory-grows"].option_values
 
 
 def _check(scene: str, *defines: str, **options) -> FmuReport:
@@ -131,6 +132,7 @@ def test_leak_is_reported_with_bytes_per_call_and_the_samples():
     assert 100 < ev["bytes_per_call"] < 600
     assert all(100 < q < 600 for q in ev["quarter_slopes"])
     assert ev["growth_bytes"] >= ev["min_growth_kib"] * 1024
+    assert ev["threshold_bytes_per_call"] == MEMORY_OPTIONS["bytes_per_call_quick"]
     calls = [c for c, _ in ev["samples"]]
     assert len(calls) >= 8 and calls == sorted(calls)
 
@@ -147,7 +149,7 @@ def test_memory_is_read_on_linux_only(monkeypatch):
     settings = RunSettings("quick", 100, 1.0, 40, 256.0)
     ctx = _context({FACT: PathRun(settings, memory_note="resident memory is Linux only")})
     with pytest.raises(ProbeSkipped):
-        list(memory_grows(ctx, bytes_per_call=64.0, min_growth_kib=1024.0))
+        list(memory_grows(ctx, **MEMORY_OPTIONS))
 
 
 def test_a_run_too_short_to_judge_memory_is_skipped():
@@ -155,7 +157,7 @@ def test_a_run_too_short_to_judge_memory_is_skipped():
     ctx = _context({FACT: PathRun(settings, calls=12, stopped="failure",
                                   samples=[(0, 1 << 20), (10, 1 << 21)])})
     with pytest.raises(ProbeSkipped):
-        list(memory_grows(ctx, bytes_per_call=64.0, min_growth_kib=1024.0))
+        list(memory_grows(ctx, **MEMORY_OPTIONS))
 
 
 # -- instances-not-independent ------------------------------------------------------------------

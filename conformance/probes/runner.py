@@ -22,13 +22,13 @@ The runner never trusts the worker to finish:
 Each of these findings names the probe and the FMI call in progress, read from the shared
 :class:`~conformance.runtime.callrecord.CallRecord` file the worker writes before every FMI call
 (during an endurance probe also after how many FMI calls).
-
-The endurance probes (``conformance.probes.endurance``) run at the level the engine passes
-(``endurance``: "quick" or "long", handed to the worker in the job), after the other probes;
-at "off" the runner skips them with that reason and they cost nothing.
 Violations of probes that completed are kept, and a fresh worker runs the remaining probes (at
 most ``max_restarts`` times, option of ``binary-crashed``). A death during setup ends probing of
 that FMU: a new worker would only die again.
+
+The endurance probes (``conformance.probes.endurance``) run after the other probes, at the level
+the engine passes (``endurance``: "quick" or "long", handed to the worker in the job); at "off"
+the runner skips them with that reason and they cost nothing.
 """
 from __future__ import annotations
 

@@ -98,14 +98,21 @@ def memory_grows(ctx: ProbeContext, *, bytes_per_call_quick: float, bytes_per_ca
         f"the path ({found.total / (1 << 20):,.1f} MiB over the last {span:,} of "
         f"{run.calls:,} calls on one instance): the FMU allocates without freeing",
         root_location(ctx),
-        evidence(bytes_per_call=round(found.slope, 1),
-                 quarter_slopes=[round(q, 1) for q in found.quarters],
-                 growth_bytes=round(found.total), rise_bytes=found.rise,
-                 threshold_bytes_per_call=bytes_per_call, min_growth_kib=min_growth_kib,
-                 calls=run.calls, stopped=run.stopped, level=run.settings.level,
-                 samples=[[c, r // KIB] for c, r in run.samples], sample_unit="[FMI calls, KiB]",
+        evidence(bytes_per_call=round(found.slope), quarter_slopes=[round(q) for q in
+                                                                      found.quarters],
+                 growth_kib=round(found.total / KIB), threshold_bytes_per_call=bytes_per_call,
+                 min_growth_kib=min_growth_kib, calls=run.calls, stopped=run.stopped,
+                 level=run.settings.level, samples=_growth_samples(run.samples),
+                 sample_unit="[FMI calls, KiB grown since the first sample]",
                  method="least squares over the second half of the samples; each of its "
                         "quarters must show the rate too"))
+
+
+def _growth_samples(samples: Sequence[tuple[int, int]]) -> list[list[int]]:
+    """The samples as growth since the first, in KiB: the worker's own size differs from run
+    to run, its growth along the path hardly."""
+    base = samples[0][1] if samples else 0
+    return [[calls, (rss - base) // KIB] for calls, rss in samples]
 
 
 # --------------------------------------------------------------- instances-not-independent

@@ -131,10 +131,11 @@ def test_leak_is_reported_with_bytes_per_call_and_the_samples():
     # 1 KiB per fmi3GetFloat64, one of the five calls of each step of the path
     assert 100 < ev["bytes_per_call"] < 600
     assert all(100 < q < 600 for q in ev["quarter_slopes"])
-    assert ev["growth_bytes"] >= ev["min_growth_kib"] * 1024
+    assert ev["growth_kib"] >= ev["min_growth_kib"]
     assert ev["threshold_bytes_per_call"] == MEMORY_OPTIONS["bytes_per_call_quick"]
     calls = [c for c, _ in ev["samples"]]
-    assert len(calls) >= 8 and calls == sorted(calls)
+    assert len(calls) >= 8 and calls == sorted(calls) and ev["samples"][0] == [0, 0]
+    assert ev["samples"][-1][1] > ev["growth_kib"]     # the second half grew by growth_kib
 
 
 def _context(facts: dict) -> ProbeContext:

@@ -55,6 +55,8 @@ class ProbeContext:
     ode: Evaluator | None
     new_instance: Callable[[str], Evaluator]    # a fresh instance in mode "dae" or "ode"
     facts: dict[str, object] = field(default_factory=dict)  # shared between probes (memo)
+    endurance: str = "quick"       # the endurance level (--endurance): "quick" or "long"
+    died: tuple[str, ...] = ()     # probes during which an earlier worker of this FMU died
 
 
 Probe = Callable[..., Iterable[Violation]]
@@ -67,4 +69,6 @@ Probe = Callable[..., Iterable[Violation]]
 #   "probe_errors": [{"rule": code, "entry": "d(g1)/d(y)", "error": float,
 #                     "tolerance": float}, ...]
 #   "points": [{"label": str, "t": float, "values": {name: float}}], "seed": int
-INFO_KEYS = ("jacobian", "probe_errors", "points", "seed")
+#   "endurance": {"level": str, "path_calls": int, "path_steps": int, "laps": int,
+#                 "stopped": str, "budget_calls": int, "cycles": int}   (docs/json-report.md)
+INFO_KEYS = ("jacobian", "probe_errors", "points", "seed", "endurance")

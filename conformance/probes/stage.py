@@ -50,6 +50,8 @@ class ProbeJob:
     draft: str | None
     seed: int
     probes: list[tuple[str, str, dict[str, Any]]] = field(default_factory=list)  # code, name, opts
+    endurance: str = "quick"       # the endurance level: "quick" or "long" ("off": not run)
+    died: list[str] = field(default_factory=list)  # probes during which a worker died before
 
 
 def run_job(job: Job, send: Callable[[dict[str, Any]], None]) -> int:
@@ -107,7 +109,7 @@ class _Stage:
             model=self.payload.model, manifest=self.payload.manifest, draft=self.payload.draft,
             seed=self.payload.seed, rng=rng, points=points, dae=evaluators["dae"],
             ode=evaluators["ode"], new_instance=lambda mode: start_instance(library, mode),
-            facts=facts)
+            facts=facts, endurance=self.payload.endurance, died=tuple(self.payload.died))
 
     def _probe(self, ctx: ProbeContext, record: CallRecord, code: str, name: str,
                options: dict[str, Any]) -> None:

@@ -2,9 +2,10 @@
 
 Every FMI call made through a :class:`Library` goes through one choke point, ``_call``, which
 
-* writes the name of the call into the shared :class:`~conformance.runtime.callrecord.CallRecord`
-  *before* calling, so that the supervisor can name the call in progress when the process
-  crashes, hangs or runs out of memory;
+* writes the name of the call and its number among the library's calls into the shared
+  :class:`~conformance.runtime.callrecord.CallRecord` *before* calling, so that the supervisor
+  can name the call in progress, and say after how many calls, when the process crashes, hangs
+  or runs out of memory;
 * counts the call;
 * turns fmi3Discard, fmi3Error and fmi3Fatal into :class:`~conformance.runtime.errors.FmiError`
   carrying the messages the FMU logged during that call.
@@ -48,7 +49,7 @@ def _recording_class() -> Any:
                     raise Unavailable(f"{fname} is not called again: it did not return in an "
                                        "earlier probe (binary-timed-out)")
                 del self.lsdae_log[:]  # the log holds the messages of the last call only
-                self.lsdae_record.enter(fname)
+                self.lsdae_record.enter(fname, self.lsdae_calls + 1)
                 result = function(*args)
                 self.lsdae_record.leave()
                 self.lsdae_calls += 1

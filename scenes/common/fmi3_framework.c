@@ -47,6 +47,13 @@
  *   DEFECT_LATE_JUMP               res[0] jumps by 1 (no event indicator)
  *   DEFECT_LATE_FAST               der[0] gains 1e5 cos(1e5 t)
  *   DEFECT_LATE_ODE_DRIFT          ODE mode solves g = 0.05 instead of g = 0
+ * and for the endurance probes (tests/fixtures/defects/endurance.py), only with sustained use:
+ *   DEFECT_LATE_CRASH              Continuous-Time Mode: the 5001st FMI call on an instance crashes
+ *   DEFECT_LATE_ERROR              Continuous-Time Mode: every FMI call after the 5000th on an
+ *                                  instance returns fmi3Error
+ *   DEFECT_LEAK                    fmi3GetFloat64 keeps 1 KiB on every call, never freed
+ *   DEFECT_GLOBAL_STATE            the states x live in one C global shared by every instance
+ *   DEFECT_STALE_STATES            a new instance starts from the states of the last one freed
  */
 #include <math.h>
 #include <stdarg.h>
@@ -144,6 +151,7 @@ typedef struct {
     int nblocks, alloc_failed;
 
     char *name;
+    unsigned long ncalls;              /* FMI calls on this instance (DEFECT_LATE_*) */
     fmi3InstanceEnvironment env;
     fmi3LogMessageCallback  logger;
     fmi3Boolean logging;
@@ -189,12 +197,40 @@ static fmi3Status discarded(Instance *c) {
 
 #define FAIL(...) do { logmsg(c, fmi3Error, __VA_ARGS__); return fmi3Error; } while (0)
 
+/* The defects that need sustained use: they strike after LATE_AFTER calls on one instance. */
+#define LATE_AFTER 5000UL
+#if defined(DEFECT_LATE_CRASH)
+#define LATE(fn)                                                               \
+    if (++c->ncalls > LATE_AFTER && c->d.state == ContinuousTimeMode) {        \
+        double *volatile gone = NULL;   /* a work buffer released too early */ \
+        c->d.t = *gone;                                                        \
+    }
+#elif defined(DEFECT_LATE_ERROR)
+#define LATE(fn)                                                               \
+    if (++c->ncalls > LATE_AFTER && c->d.state == ContinuousTimeMode)          \
+        FAIL("%s: work buffer exhausted after %lu calls", fn, LATE_AFTER)
+#else
+#define LATE(fn)
+#endif
+
 /* Declares `c`, checks the instance pointer and the state mask. */
 #define BEGIN(fn, mask)                                                        \
     Instance *c = (Instance *)instance;                                        \
     if (!c) return fmi3Error;                                                  \
+    LATE(fn);                                                                  \
     if (!(c->d.state & (mask)))                                                \
         FAIL("%s: not allowed in %s", fn, state_name(c->d.state))
+
+#ifdef DEFECT_LEAK
+static void *leaked;                   /* a result cache that only grows */
+#endif
+#ifdef DEFECT_GLOBAL_STATE
+static double global_x[NMAX];          /* generated code's one state vector for every instance */
+#endif
+#ifdef DEFECT_STALE_STATES
+static double stale_x[NMAX];           /* a static state vector, set only when the library loads */
+static int have_stale;
+#endif
 
 /* A zeroed heap block owned by the instance (freed with it); NULL once one failed. */
 static void *grab(Instance *c, size_t n, size_t size) {
@@ -849,6 +885,9 @@ static int allocate(Instance *c) {
     c->der = c->u + NU;
     c->res = c->der + NX;
     c->y = c->res + NW;
+#ifdef DEFECT_GLOBAL_STATE
+    c->x = global_x;
+#endif
     build_index(c);
     c->pval = (double *)grab(c, (size_t)c->nnz, sizeof(double));
     c->ab = (double *)grab(c, nw * (size_t)c->bw, sizeof(double));
@@ -937,6 +976,9 @@ fmi3Instance fmi3InstantiateModelExchange(fmi3String instanceName, fmi3String in
         return NULL;
     }
     reset_data(c);
+#ifdef DEFECT_STALE_STATES
+    if (have_stale) memcpy(c->x, stale_x, sizeof(double) * (size_t)NX);
+#endif
     return c;
 }
 
@@ -971,6 +1013,12 @@ void fmi3FreeInstance(fmi3Instance instance) {
     Instance *c = (Instance *)instance;
     int k;
     if (!c) return;
+#ifdef DEFECT_STALE_STATES
+    if (c->x) {
+        memcpy(stale_x, c->x, sizeof(double) * (size_t)NX);
+        have_stale = 1;
+    }
+#endif
     for (k = 0; k < c->nblocks; k++) free(c->blocks[k]);
     free(c->name);
     free(c);
@@ -1064,6 +1112,16 @@ fmi3Status fmi3GetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], 
     int idx, computed = 0;
     fmi3Status status;
     BEGIN("fmi3GetFloat64", ANY_STATE);
+#ifdef DEFECT_LEAK
+    {
+        void **block = (void **)malloc(1024);
+        if (block) {
+            memset(block, 1, 1024);
+            block[0] = leaked;
+            leaked = block;
+        }
+    }
+#endif
     if (nvr != nValues) FAIL("fmi3GetFloat64: nValues != nValueReferences");
     if (nvr && (!vr || !values)) FAIL("fmi3GetFloat64: NULL argument");
     for (k = 0; k < nvr; k++) {

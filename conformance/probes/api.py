@@ -19,7 +19,7 @@ on top of fmpy), which records the call in progress, the FMI status and the FMU'
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Callable, Iterable, Sequence
+from typing import Any, Callable, Iterable, Mapping, Sequence
 
 import numpy as np
 
@@ -55,6 +55,9 @@ class ProbeContext:
     ode: Evaluator | None
     new_instance: Callable[[str], Evaluator]    # a fresh instance in mode "dae" or "ode"
     facts: dict[str, object] = field(default_factory=dict)  # shared between probes (memo)
+    # A fresh instance in Initialization Mode: (mode, start values by vr, start time) -> an
+    # object with get_float64, directional_as_set and free (runtime.modes.start_initialization)
+    new_initialization: Callable[[str, Mapping[int, float], float], Any] | None = None
 
 
 Probe = Callable[..., Iterable[Violation]]

@@ -1,0 +1,128 @@
+"""InitialUnknown probes (DAE750-DAE752): the dependencies of ``<InitialUnknown>`` in
+Initialization Mode, measured on the binary.
+
+They compare, each with the tolerances of its catalogue entry, the Jacobian of the initial
+unknowns with respect to the knowns of Initialization Mode, measured once per FMU by
+:func:`conformance.probes.initial_survey.initial_survey` (fresh instances, the knowns set as
+start values before fmi3EnterInitializationMode):
+
+* ``initial-dependency-undeclared``: an entry the ``dependencies`` leave out that is clearly
+  non-zero (MS-20, MS-11);
+* ``initial-dependencies-kind-violated``: an entry declared ``constant`` whose finite difference
+  changes between points (MS-31: the unknown is affine in that known);
+* ``initial-directional-derivative-mismatch``: fmi3GetDirectionalDerivative in Initialization
+  Mode against finite differences (PD-02, PD-03, PD-05, PD-06).
+
+The comparisons are those of the Continuous-Time Mode probes (``entry_comparison``): scaled by
+the row scale ``S_i = sum_j |J_ij| * nominal_j``, a difference counts only above ``margin``
+times the finite-difference error estimate plus ``rtol`` times the scale. A finding names the
+InitialUnknown element (manifest or modelDescription, the list the instance follows) and its
+line.
+"""
+from __future__ import annotations
+
+from collections.abc import Iterator
+
+from ..findings import Violation, evidence
+from .api import ProbeContext, ProbeSkipped
+from .entry_comparison import (
+    entry_violations,
+    kind_changes,
+    mismatched_entries,
+    undeclared_entries,
+)
+from .initial_survey import SETTINGS_FACT, InitialSurvey, SurveySettings, surveyed
+from .jacobian import point_evidence
+
+__all__ = ["PROBES"]
+
+MODES = {"dae": "DAE mode", "ode": "ODE mode"}
+
+
+def _where(s: InitialSurvey) -> dict:
+    return {"element": "InitialUnknown", "file": s.file, "mode": MODES.get(s.mode, s.mode),
+            "instances": s.instances}
+
+
+def initial_dependency_undeclared(ctx: ProbeContext, *, rtol: float, margin: float,
+                                  ulps: float, points: int, max_instances: int,
+                                  max_seconds: float) -> Iterator[Violation]:
+    """An initial unknown clearly depends on a known of Initialization Mode that its
+    dependencies leave out (MS-11, MS-20). ``points``, ``max_instances`` and ``max_seconds`` set
+    the survey the other InitialUnknown probes read too."""
+    ctx.facts.setdefault(SETTINGS_FACT, SurveySettings(points, max_instances, max_seconds))
+    s = surveyed(ctx)
+    layout = s.layout
+    assert layout is not None
+    worst = undeclared_entries(s, rtol=rtol, margin=margin, ulps=ulps)
+    for (i, j), w in sorted(worst.items()):
+        row, col = layout.rows[i], layout.cols[j]
+        yield Violation(
+            f"{{subject}} is clearly non-zero in Initialization Mode ({MODES.get(s.mode)}) but "
+            f"the dependencies of <InitialUnknown> '{row.name}' do not list '{col.name}' "
+            f"({_known_text(col.role)}): an importer that solves the initialisation from "
+            "them gets it wrong", row.location,
+            evidence(_where(s), entry=layout.entry(i, j), unknown=row.name, known=col.name,
+                     known_value_reference=col.vr, known_role=col.role, **w.items,
+                     point=point_evidence(layout, w.ps)),
+            subject=layout.entry(i, j))
+
+
+def _known_text(role: str) -> str:
+    return {"time": "the start time", "input": "an input", "parameter": "a parameter",
+            "state": "a state's exact start value"}.get(role, "an exact start value")
+
+
+def initial_dependencies_kind_violated(ctx: ProbeContext, *, rtol: float, margin: float,
+                                       ulps: float) -> Iterator[Violation]:
+    """An InitialUnknown entry declared ``constant`` whose partial derivative changes between
+    points (MS-31). Only ``constant`` is a claim here: the other kinds are not allowed on an
+    InitialUnknown, which the static rules report."""
+    layout = surveyed(ctx).layout
+    assert layout is not None
+    constant = {(i, j): k for i, j, k in zip(layout.pattern.rows.tolist(),
+                                             layout.pattern.cols.tolist(), layout.kinds)
+                if k == "constant" and layout.rows[i].explicit}
+    if not constant:
+        return  # nothing declared constant: nothing to verify
+    s = surveyed(ctx, min_points=2)
+    for (i, j), c in kind_changes(s, constant, rtol=rtol, margin=margin, ulps=ulps).items():
+        yield Violation(
+            f"{{subject}} is declared 'constant' by <InitialUnknown> '{layout.rows[i].name}' "
+            "but changes between points of Initialization Mode: the initial unknown is not "
+            "affine in the known", layout.rows[i].location,
+            evidence(_where(s), entry=layout.entry(i, j), kind=c.kind, smallest=c.lo[0],
+                     largest=c.hi[0], tolerance=c.tolerance,
+                     points=[point_evidence(layout, c.lo[2]), point_evidence(layout, c.hi[2])]),
+            subject=layout.entry(i, j))
+
+
+def initial_directional_derivative_mismatch(ctx: ProbeContext, *, rtol: float, margin: float,
+                                            ulps: float) -> Iterator[Violation]:
+    """fmi3GetDirectionalDerivative in Initialization Mode, the initial unknowns as unknowns and
+    the knowns of MS-11 as knowns, against finite differences (PD-02, PD-03, PD-06)."""
+    me = ctx.model.model_exchange if ctx.model is not None else None
+    if not (me and me.flag("providesDirectionalDerivatives")):
+        raise ProbeSkipped("the FMU does not provide directional derivatives")
+    s = surveyed(ctx)
+    for what, point, exc in s.failures:
+        # Not a finding: where the initial problem is singular the derivative does not exist,
+        # and the FMU may rightly refuse it (its residuals and dg/dw have rules of their own).
+        if what == "directional":
+            first = f": {exc.log[0]}" if exc.log else ""
+            raise ProbeSkipped(f"fmi3GetDirectionalDerivative fails in Initialization Mode "
+                               f"({exc.status} at point {point.label}{first}); nothing to "
+                               "compare")
+    worst = mismatched_entries(s, "dd", rtol=rtol, margin=margin, ulps=ulps)
+    for v in entry_violations(
+            s, worst, "fmi3GetDirectionalDerivative in Initialization Mode gives {subject} "
+            "that finite differences of the initial unknowns do not confirm"):
+        yield Violation(v.message, v.location, evidence(_where(s), **dict(v.evidence)),
+                        subject=v.subject)
+
+
+PROBES = {
+    "DAE750": initial_dependency_undeclared,
+    "DAE751": initial_dependencies_kind_violated,
+    "DAE752": initial_directional_derivative_mismatch,
+}

@@ -126,6 +126,7 @@ class KindChange:
     lo: tuple[float, float, PointSurvey]
     hi: tuple[float, float, PointSurvey]
     tolerance: float
+    scale: float        # the largest row scale S_i / nominal_j over the points (rtol's unit)
 
 
 def kind_changes(s: Survey, kinds: Mapping[tuple[int, int], str], *, rtol: float,
@@ -148,9 +149,11 @@ def kind_changes(s: Survey, kinds: Mapping[tuple[int, int], str], *, rtol: float
     for (i, j), values in sorted(samples.items()):
         hi = max(values, key=lambda v: v[0])
         lo = min(values, key=lambda v: v[0])
-        tol = margin * (hi[1] + lo[1]) + rtol * max(v[2] for v in values)
+        scale = max(v[2] for v in values)
+        tol = margin * (hi[1] + lo[1]) + rtol * scale
         if hi[0] - lo[0] > tol:
-            out[(i, j)] = KindChange(kinds[(i, j)], lo[:2] + (lo[3],), hi[:2] + (hi[3],), tol)
+            out[(i, j)] = KindChange(kinds[(i, j)], lo[:2] + (lo[3],), hi[:2] + (hi[3],), tol,
+                                     scale)
     return out
 
 

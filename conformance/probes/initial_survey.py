@@ -19,9 +19,9 @@ The survey is measured once per FMU and kept in ``ctx.facts``.
 """
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
 import time
-from dataclasses import dataclass
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -62,6 +62,10 @@ class InitialSurvey(Survey):
     instances: int = 0
     budget_stop: str = ""
     fatal: str = ""           # a call returned fmi3Fatal: why the survey stopped
+    # what confirm() needs: the instance factory and what is left of the budget
+    factory: Any = field(default=None, repr=False, compare=False)
+    counter: Any = field(default=None, repr=False, compare=False)
+    confirmed: dict = field(default_factory=dict, repr=False, compare=False)
 
 
 def settings_of(ctx: ProbeContext) -> SurveySettings:
@@ -186,6 +190,7 @@ def _run(ctx: ProbeContext, settings: SurveySettings) -> InitialSurvey:
     per_point = 1 + numdiff.CALLS_PER_DIRECTION[MEASURING.method] * (
         colouring.count + MEASURING.directions)
     counter = _Counter(settings)
+    result.factory, result.counter = ctx.new_initialization, counter
     for point in points:
         need = per_point + (1 if result.directional else 0)
         if counter.left < need:
@@ -249,6 +254,45 @@ def _measure_point(factory: Factory, mode: str, layout: JacobianLayout, point: P
         if at.base is not None:
             at.base.free()
     return PointSurvey(point, at.x, entries)
+
+
+def confirm(s: InitialSurvey, ps: PointSurvey, j: int, *, factor: float, ulps: float
+            ) -> tuple[np.ndarray, np.ndarray] | None:
+    """Column ``j`` at the point of ``ps`` measured again with central differences at
+    ``factor`` times the survey's step: (values, error bounds), shape (m,), per unit of the
+    known; None when it cannot be (no room within the bounds, the budget spent, the FMU failed).
+
+    The unknowns of Initialization Mode come out of the FMU's own solver, whose error can be
+    far above the rounding noise the error estimate assumes (an ill-conditioned dg/dw amplifies
+    it) and correlated over a step, so that two step sizes may agree by chance. A finding is
+    only reported when it holds at a step ``factor`` times larger too, where that noise weighs
+    ``factor`` times less and the truncation error is estimated again.
+    """
+    key = (ps.point.label, j, factor)
+    if key in s.confirmed:
+        return s.confirmed[key]
+    layout = s.layout
+    assert layout is not None
+    lower = np.array([c.lower for c in layout.cols])
+    upper = np.array([c.upper for c in layout.cols])
+    scale = factor * np.maximum(np.abs(ps.x), layout.nominal)
+    steps = numdiff.step_sizes(ps.x, scale, method=MEASURING.method, lower=lower, upper=upper)
+    out = None
+    if steps[j] > 0 and s.counter is not None and not s.fatal:
+        at = _At(s.factory, s.mode, layout, ps.point, s.counter)
+        direction = np.zeros(len(layout.cols))
+        direction[j] = steps[j]
+        try:
+            diff = numdiff.difference(at.fun, direction, method=MEASURING.method)
+        except FmiError as exc:
+            _note_fatal(s, exc)
+        except (_OverBudget, ProbeSkipped):
+            pass
+        else:
+            noise = ulps * ps.entries.basis
+            out = (diff.value / steps[j], diff.error(noise) / steps[j])
+    s.confirmed[key] = out
+    return out
 
 
 def _note_fatal(s: InitialSurvey, exc: FmiError) -> None:

@@ -21,7 +21,10 @@ line.
 """
 from __future__ import annotations
 
+import math
 from collections.abc import Iterator
+
+import numpy as np
 
 from ..findings import Violation, evidence
 from .api import ProbeContext, ProbeSkipped
@@ -31,8 +34,8 @@ from .entry_comparison import (
     mismatched_entries,
     undeclared_entries,
 )
-from .initial_survey import SETTINGS_FACT, InitialSurvey, SurveySettings, surveyed
-from .jacobian import point_evidence
+from .initial_survey import SETTINGS_FACT, InitialSurvey, SurveySettings, confirm, surveyed
+from .jacobian import PointSurvey, point_evidence
 
 __all__ = ["PROBES"]
 
@@ -40,16 +43,36 @@ MODES = {"dae": "DAE mode", "ode": "ODE mode"}
 
 
 def _where(s: InitialSurvey) -> dict:
+    used = s.counter.used if s.counter is not None else s.instances   # confirmations too
     return {"element": "InitialUnknown", "file": s.file, "mode": MODES.get(s.mode, s.mode),
-            "instances": s.instances}
+            "instances": used}
+
+
+def _confirmed(s: InitialSurvey, ps: PointSurvey, i: int, j: int, *, factor: float,
+               ulps: float) -> tuple[float, float] | None:
+    """Entry (i, j) at ``ps`` measured again at ``factor`` times the step: (value, error)."""
+    c = confirm(s, ps, j, factor=factor, ulps=ulps)
+    if c is None or not (np.isfinite(c[0][i]) and np.isfinite(c[1][i])):
+        return None
+    return float(c[0][i]), float(c[1][i])
+
+
+def _holds(before: float, after: float, tolerance: float, factor: float) -> bool:
+    """A discrepancy found at the survey's step (``before``) still counts at ``factor`` times
+    the step (``after``): above its tolerance there, and not shrunk as an error of the FMU's
+    solver shrinks with a larger step (by ``factor``), only as truncation or chance do (by
+    less than ``sqrt(factor)``). A real fault does not depend on the step."""
+    return abs(after) > tolerance and abs(after) * math.sqrt(factor) >= abs(before)
 
 
 def initial_dependency_undeclared(ctx: ProbeContext, *, rtol: float, margin: float,
-                                  ulps: float, points: int, max_instances: int,
-                                  max_seconds: float) -> Iterator[Violation]:
+                                  ulps: float, confirm_factor: float, points: int,
+                                  max_instances: int, max_seconds: float
+                                  ) -> Iterator[Violation]:
     """An initial unknown clearly depends on a known of Initialization Mode that its
-    dependencies leave out (MS-11, MS-20). ``points``, ``max_instances`` and ``max_seconds`` set
-    the survey the other InitialUnknown probes read too."""
+    dependencies leave out (MS-11, MS-20), at the survey's step and at ``confirm_factor``
+    times it. ``points``, ``max_instances`` and ``max_seconds`` set the survey the other
+    InitialUnknown probes read too."""
     ctx.facts.setdefault(SETTINGS_FACT, SurveySettings(points, max_instances, max_seconds))
     s = surveyed(ctx)
     layout = s.layout
@@ -57,6 +80,13 @@ def initial_dependency_undeclared(ctx: ProbeContext, *, rtol: float, margin: flo
     worst = undeclared_entries(s, rtol=rtol, margin=margin, ulps=ulps)
     for (i, j), w in sorted(worst.items()):
         row, col = layout.rows[i], layout.cols[j]
+        again = _confirmed(s, w.ps, i, j, factor=confirm_factor, ulps=ulps)
+        if again is None or not _holds(
+                w.items["finite_difference"], again[0],
+                margin * again[1] + rtol * w.items["row_scale"] / col.nominal, confirm_factor):
+            continue
+        w.items.update(confirmed_finite_difference=again[0], confirmed_error_estimate=again[1],
+                       confirm_factor=confirm_factor)
         yield Violation(
             f"{{subject}} is clearly non-zero in Initialization Mode ({MODES.get(s.mode)}) but "
             f"the dependencies of <InitialUnknown> '{row.name}' do not list '{col.name}' "
@@ -74,10 +104,12 @@ def _known_text(role: str) -> str:
 
 
 def initial_dependencies_kind_violated(ctx: ProbeContext, *, rtol: float, margin: float,
-                                       ulps: float) -> Iterator[Violation]:
+                                       ulps: float, confirm_factor: float
+                                       ) -> Iterator[Violation]:
     """An InitialUnknown entry declared ``constant`` whose partial derivative changes between
-    points (MS-31). Only ``constant`` is a claim here: the other kinds are not allowed on an
-    InitialUnknown, which the static rules report."""
+    points (MS-31), at the survey's step and at ``confirm_factor`` times it. Only ``constant``
+    is a claim here: the other kinds are not allowed on an InitialUnknown, which the static
+    rules report."""
     layout = surveyed(ctx).layout
     assert layout is not None
     constant = {(i, j): k for i, j, k in zip(layout.pattern.rows.tolist(),
@@ -87,20 +119,29 @@ def initial_dependencies_kind_violated(ctx: ProbeContext, *, rtol: float, margin
         return  # nothing declared constant: nothing to verify
     s = surveyed(ctx, min_points=2)
     for (i, j), c in kind_changes(s, constant, rtol=rtol, margin=margin, ulps=ulps).items():
+        lo = _confirmed(s, c.lo[2], i, j, factor=confirm_factor, ulps=ulps)
+        hi = _confirmed(s, c.hi[2], i, j, factor=confirm_factor, ulps=ulps)
+        if lo is None or hi is None or not _holds(
+                c.hi[0] - c.lo[0], hi[0] - lo[0], margin * (hi[1] + lo[1]) + rtol * c.scale,
+                confirm_factor):
+            continue
         yield Violation(
             f"{{subject}} is declared 'constant' by <InitialUnknown> '{layout.rows[i].name}' "
             "but changes between points of Initialization Mode: the initial unknown is not "
             "affine in the known", layout.rows[i].location,
             evidence(_where(s), entry=layout.entry(i, j), kind=c.kind, smallest=c.lo[0],
                      largest=c.hi[0], tolerance=c.tolerance,
+                     confirmed=[lo[0], hi[0]], confirm_factor=confirm_factor,
                      points=[point_evidence(layout, c.lo[2]), point_evidence(layout, c.hi[2])]),
             subject=layout.entry(i, j))
 
 
 def initial_directional_derivative_mismatch(ctx: ProbeContext, *, rtol: float, margin: float,
-                                            ulps: float) -> Iterator[Violation]:
+                                            ulps: float, confirm_factor: float
+                                            ) -> Iterator[Violation]:
     """fmi3GetDirectionalDerivative in Initialization Mode, the initial unknowns as unknowns and
-    the knowns of MS-11 as knowns, against finite differences (PD-02, PD-03, PD-06)."""
+    the knowns of MS-11 as knowns, against finite differences at the survey's step and at
+    ``confirm_factor`` times it (PD-02, PD-03, PD-06)."""
     me = ctx.model.model_exchange if ctx.model is not None else None
     if not (me and me.flag("providesDirectionalDerivatives")):
         raise ProbeSkipped("the FMU does not provide directional derivatives")
@@ -113,7 +154,19 @@ def initial_directional_derivative_mismatch(ctx: ProbeContext, *, rtol: float, m
             raise ProbeSkipped(f"fmi3GetDirectionalDerivative fails in Initialization Mode "
                                f"({exc.status} at point {point.label}{first}); nothing to "
                                "compare")
+    layout = s.layout
+    assert layout is not None
     worst = mismatched_entries(s, "dd", rtol=rtol, margin=margin, ulps=ulps)
+    for (i, j), w in list(worst.items()):
+        again = _confirmed(s, w.ps, i, j, factor=confirm_factor, ulps=ulps)
+        if again is None or not _holds(
+                w.items["fmu"] - w.items["finite_difference"], w.items["fmu"] - again[0],
+                margin * again[1] + rtol * w.items["row_scale"] / layout.cols[j].nominal,
+                confirm_factor):
+            del worst[(i, j)]
+            continue
+        w.items.update(confirmed_finite_difference=again[0], confirmed_error_estimate=again[1],
+                       confirm_factor=confirm_factor)
     for v in entry_violations(
             s, worst, "fmi3GetDirectionalDerivative in Initialization Mode gives {subject} "
             "that finite differences of the initial unknowns do not confirm"):

@@ -2,7 +2,7 @@
 or into Initialization Mode with given start values."""
 from __future__ import annotations
 
-from typing import Mapping
+from collections.abc import Mapping
 
 from .errors import FmiError, Unavailable
 from .instance import Instance
@@ -48,7 +48,7 @@ def start_initialization(library: Library, mode: str, values: Mapping[int, float
     ``mode`` or not at all.
     """
     _check_mode(library.layout, mode)
-    inst = Instance(library, name=library.next_name(f"init-{mode}"))
+    inst = Instance(library, name=library.next_initialization_name(mode))
     try:
         if mode == "dae" and library.layout.enable is not None:
             configure(inst, True)

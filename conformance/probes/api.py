@@ -19,7 +19,7 @@ on top of fmpy), which records the call in progress, the FMI status and the FMU'
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Callable, Iterable, Sequence
+from typing import Any, Callable, Iterable, Mapping, Sequence
 
 import numpy as np
 
@@ -57,6 +57,9 @@ class ProbeContext:
     facts: dict[str, object] = field(default_factory=dict)  # shared between probes (memo)
     endurance: str = "quick"       # the endurance level (--endurance): "quick" or "long"
     died: tuple[str, ...] = ()     # probes during which an earlier worker of this FMU died
+    # A fresh instance in Initialization Mode: (mode, start values by vr, start time) -> an
+    # object with get_float64, directional_as_set and free (runtime.modes.start_initialization)
+    new_initialization: Callable[[str, Mapping[int, float], float], Any] | None = None
 
 
 Probe = Callable[..., Iterable[Violation]]

@@ -32,7 +32,7 @@ from ..runtime.callrecord import CallRecord
 from ..runtime.child import memory_info
 from ..runtime.layout import Layout
 from ..runtime.library import Library
-from ..runtime.modes import start_instance
+from ..runtime.modes import start_initialization, start_instance
 from ..runtime.protocol import MEMORY_EXIT, Job, violation_json
 from .api import FmiError, ProbeContext, ProbeSkipped
 from .registry import PROBES
@@ -109,7 +109,9 @@ class _Stage:
             model=self.payload.model, manifest=self.payload.manifest, draft=self.payload.draft,
             seed=self.payload.seed, rng=rng, points=points, dae=evaluators["dae"],
             ode=evaluators["ode"], new_instance=lambda mode: start_instance(library, mode),
-            facts=facts, endurance=self.payload.endurance, died=tuple(self.payload.died))
+            facts=facts, endurance=self.payload.endurance, died=tuple(self.payload.died),
+            new_initialization=lambda mode, values, t: start_initialization(
+                library, mode, values, t))
 
     def _probe(self, ctx: ProbeContext, record: CallRecord, code: str, name: str,
                options: dict[str, Any]) -> None:

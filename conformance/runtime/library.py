@@ -86,6 +86,7 @@ class Library:
         resources = os.path.join(directory, "resources")
         self.resource_path = resources + os.sep if os.path.isdir(resources) else None
         self._count = 0
+        self._init_count = 0
 
     @property
     def calls(self) -> int:
@@ -109,6 +110,12 @@ class Library:
     def next_name(self, mode: str) -> str:
         self._count += 1
         return f"lsdae-{mode}-{self._count}"
+
+    def next_initialization_name(self, mode: str) -> str:
+        """The name of an instance left in Initialization Mode (modes.start_initialization),
+        numbered apart: the many of them never rename the other instances in the reports."""
+        self._init_count += 1
+        return f"lsdae-init-{mode}-{self._init_count}"
 
     def free_all(self) -> None:
         for inst in list(self.instances):

@@ -43,6 +43,10 @@
  *   DEFECT_WRONG_ADJOINT           the adjoint alone doubles d(res[0])/d(w[0]) (DAE mode)
  *   DEFECT_ODE_DAE_INCONSISTENT    ODE mode solves g = 0.05 instead of g = 0
  *   DEFECT_RESET_KEEPS_SWITCH      fmi3Reset keeps the DAE switch and the first state
+ *   DEFECT_INITIAL_UNDECLARED      Initialization Mode: y[0] also depends on x[NX-1] (its value
+ *                                  and its derivatives agree; the XML does not say so)
+ *   DEFECT_INITIAL_DIRECTIONAL     Initialization Mode, DAE mode: the directional derivative of
+ *                                  w drops the sign of -(dg/dw)^-1 dg/dk
  * and for the simulation probes (tests/fixtures/defects/simulation.py), only for t > 0.5:
  *   DEFECT_LATE_JUMP               res[0] jumps by 1 (no event indicator)
  *   DEFECT_LATE_FAST               der[0] gains 1e5 cos(1e5 t)
@@ -669,7 +673,15 @@ static fmi3Status partial_derivatives(fmi3Instance instance, const char *fn, int
         directional(c, total);
         for (i = 0; i < nU; i++) {
             int r = unknown_row(c, unknowns[i]);
+#ifdef DEFECT_INITIAL_DIRECTIONAL
+            sens[i] = r < NROWS ? c->v[r] : c->z[r - NROWS];
+#else
             sens[i] = r < NROWS ? c->v[r] : -c->z[r - NROWS];
+#endif
+#ifdef DEFECT_INITIAL_UNDECLARED
+            if (c->d.state == InitializationMode && NX > 0 && NY > 0 && r == NX + NW)
+                sens[i] += 0.25 * c->s[NX - 1];
+#endif
         }
     } else {
         memset(c->a, 0, sizeof(double) * (size_t)NROWS);
@@ -681,6 +693,11 @@ static fmi3Status partial_derivatives(fmi3Instance instance, const char *fn, int
         }
         adjoint(c, total);
         for (j = 0; j < nK; j++) sens[j] = c->p[known_col(c, knowns[j])];
+#ifdef DEFECT_INITIAL_UNDECLARED
+        if (c->d.state == InitializationMode && NX > 0 && NY > 0)
+            for (j = 0; j < nK; j++)
+                if (known_col(c, knowns[j]) == NX - 1) sens[j] += 0.25 * c->a[NX + NW];
+#endif
     }
     return fmi3OK;
 }
@@ -1143,6 +1160,11 @@ fmi3Status fmi3GetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], 
     for (k = 0; k < nvr; k++) {
         int kind = lookup(c, vr[k], &idx);
         values[k] = *slot(c, kind, idx);
+#ifdef DEFECT_INITIAL_UNDECLARED
+        /* only as read in Initialization Mode: the stored y[0] is untouched */
+        if (kind == K_Y && idx == 0 && c->d.state == InitializationMode && NX > 0)
+            values[k] += 0.25 * c->x[NX - 1];
+#endif
     }
     return fmi3OK;
 }

@@ -91,6 +91,7 @@ class _State:
         self.info: dict[str, object] = {}
         self.unread: dict[str, str] = {}  # need -> why the file it stands for was not read
         self.has_manifest = False
+        self.not_checked: str | None = None   # why nothing past the archive was checked
 
     def skip_for(self, code: str, needs, have, reason: str) -> str:
         """Skip a rule whose ``needs`` are not all there, and return the reason: the layer's
@@ -116,6 +117,11 @@ def _run(path: Path, options: EngineOptions, catalogue: Catalogue, selection: Ru
         names = tuple(source.names())
         state.has_manifest = MANIFEST in names
         model = _read_model(source, names, options, collector, texts, state)
+        if state.not_checked:
+            state.info["not_checked"] = state.not_checked
+            state.skipped.update((r.code, state.not_checked) for r in catalogue
+                                 if r.code in selection.enabled and r.stage not in ("archive",))
+            return
         manifest = _read_manifest(source, names, options, collector, texts, state, model)
         if model is not None:
             state.info.update(model_name=model.model_name, fmi_version=model.fmi_version,
@@ -205,6 +211,15 @@ def _read_model(source, names: Sequence[str], options: EngineOptions, collector:
     tree = _read_xml(source, MODEL_DESCRIPTION, collector, texts)
     if tree is None:
         state.unread["model-description"] = f"{MODEL_DESCRIPTION} cannot be read or parsed"
+        return None
+    version = (tree.getroot().get("fmiVersion") or "").strip()
+    if version[:2] in ("1.", "2."):  # out of scope: said once, nothing else is checked
+        collector.emit("fmi-version-unsupported", Violation(
+            f"an FMI {version} FMU: fmi-ls-dae is a layered standard of FMI 3.0, so this FMU "
+            "is not checked", Location(file=MODEL_DESCRIPTION, line=tree.getroot().sourceline,
+                                       path="/fmiModelDescription"),
+            evidence(fmi_version=version)))
+        state.not_checked = f"FMI {version} FMU: fmi-ls-dae needs FMI 3.0"
         return None
     if not options.probes_only:
         collector.add_stage(validate_model_description(tree))

@@ -133,6 +133,12 @@ class FmuReport:
         return max((f.severity for f in self.findings), default=None)
 
     @property
+    def not_checked(self) -> str | None:
+        """Why the FMU as a whole was not checked (an FMI 2.0 FMU), or None."""
+        text = dict(self.info).get("not_checked")
+        return text if isinstance(text, str) else None
+
+    @property
     def binary_not_checked(self) -> str | None:
         """Why the probes did not run on this FMU's binary (``info["probes"]``), or None when
         they ran: every reporter says it, so that a clean result is never taken for a verified

@@ -25,11 +25,14 @@ def render(report: Report, catalogue: Catalogue | None = None, *, color: bool = 
         out.extend(_fmu(fmu, color, measured, names))
     errors = sum(f.count(Severity.ERROR) for f in report.fmus)
     warnings = sum(f.count(Severity.WARNING) for f in report.fmus)
-    unchecked = sum(1 for f in report.fmus if f.binary_not_checked)
+    unchecked = sum(1 for f in report.fmus if f.binary_not_checked and not f.not_checked)
+    skipped = sum(1 for f in report.fmus if f.not_checked)
     binaries = (f"; the binary of {_plural(unchecked, 'FMU')} was not checked" if unchecked
                 else "")
     not_run = sum(len(f.rules_not_run) for f in report.fmus)
     binaries = (f", {_plural(not_run, 'rule')} not run" if not_run else "") + binaries
+    if skipped:
+        binaries += f"; {_plural(skipped, 'FMU')} not checked (FMI version)"
     out.append(f"checked {len(report.fmus)} FMU{'s' if len(report.fmus) != 1 else ''}: "
                f"{_plural(errors, 'error')}, {_plural(warnings, 'warning')}{binaries}")
     if report.interrupted:
@@ -65,6 +68,8 @@ def _fmu(fmu: FmuReport, color: bool, measured: set[str], names: dict[str, str])
                f"{fmu.count(Severity.INFO)} info")
     if fmu.rules_not_run:
         summary += f", {_plural(len(fmu.rules_not_run), 'rule')} not run"
+    if fmu.not_checked:
+        summary = f"{fmu.path}: not checked ({fmu.not_checked})"
     lines.extend(_not_run(fmu, names))
     lines.append(_paint(summary, _BOLD, color))
     if fmu.binary_not_checked:

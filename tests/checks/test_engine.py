@@ -141,3 +141,20 @@ def test_a_reader_that_fails_never_calls_a_present_manifest_absent(tmp_path, mon
     assert dict(report.info)["manifest"].startswith("present, not checked")
     text = console.render(Report(tool_version="1", fmus=(report,)))
     assert "no fmi-ls-dae manifest" not in text
+
+
+def test_an_fmi2_fmu_is_one_warning_and_not_checked(tmp_path, capsys):
+    """An FMI 2.0 FMU: fmi-version-unsupported once, no schema noise, every other rule skipped
+    with the reason, exit 0 under the default --fail-on, and "not checked" in the summary."""
+    from conformance.cli import main
+    from tests.fixturekit import all_cases
+
+    case = next(c for c in all_cases() if c.id == "DAE092/fail")
+    path = materialise(case, tmp_path)
+    report = check_fmu(path, options=EngineOptions(probes=True))
+    assert [f.name for f in report.findings] == ["fmi-version-unsupported"]
+    assert report.not_checked and not report.rules_run
+    assert {reason for _, reason in report.rules_skipped} == {report.not_checked}
+    assert main(["check", str(path), "--color", "never"]) == 0
+    out = capsys.readouterr().out
+    assert "not checked" in out and "schema-violation" not in out

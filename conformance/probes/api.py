@@ -53,7 +53,8 @@ class ProbeContext:
     points: Sequence[Point]
     dae: Evaluator | None
     ode: Evaluator | None
-    new_instance: Callable[[str], Evaluator]    # a fresh instance in mode "dae" or "ode"
+    # a fresh instance in mode "dae" or "ode"; start_values= (vr -> value) set before it starts
+    new_instance: Callable[..., Evaluator]
     facts: dict[str, object] = field(default_factory=dict)  # shared between probes (memo)
     endurance: str = "quick"       # the endurance level (--endurance): "quick" or "long"
     died: tuple[str, ...] = ()     # probes during which an earlier worker of this FMU died

@@ -108,7 +108,8 @@ class _Stage:
         return ProbeContext(
             model=self.payload.model, manifest=self.payload.manifest, draft=self.payload.draft,
             seed=self.payload.seed, rng=rng, points=points, dae=evaluators["dae"],
-            ode=evaluators["ode"], new_instance=lambda mode: start_instance(library, mode),
+            ode=evaluators["ode"], new_instance=lambda mode, start_values=None: start_instance(
+                library, mode, start_values=start_values),
             facts=facts, endurance=self.payload.endurance, died=tuple(self.payload.died),
             new_initialization=lambda mode, values, t: start_initialization(
                 library, mode, values, t))

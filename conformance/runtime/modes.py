@@ -65,8 +65,10 @@ def start_initialization(library: Library, mode: str, values: Mapping[int, float
     return inst
 
 
-def start_instance(library: Library, mode: str, *, runtime_switch: bool = True) -> Instance:
-    """A new instance in Continuous-Time Mode, in ``mode`` ("dae" or "ode").
+def start_instance(library: Library, mode: str, *, runtime_switch: bool = True,
+                   start_values: Mapping[int, float] | None = None) -> Instance:
+    """A new instance in Continuous-Time Mode, in ``mode`` ("dae" or "ode"); ``start_values``
+    (Float64 value reference -> value) are set in Instantiated, before the initialisation.
 
     DAE mode: Configuration Mode with the switch set true, then the ordinary initialisation
     (DAE-12). An FMU without an enable parameter is permanently in DAE mode and is initialised
@@ -77,9 +79,11 @@ def start_instance(library: Library, mode: str, *, runtime_switch: bool = True) 
     layout = library.layout
     _check_mode(layout, mode)
     inst = Instance(library, name=library.next_name(mode))
+    given = list(start_values or {})
     try:
         if mode == "dae" and layout.enable is not None:
             configure(inst, True)
+        inst.set_float64(given, [float(start_values[vr]) for vr in given])  # type: ignore
         try:
             inst.enter_initialization_mode(layout.start_time)
             inst.exit_initialization_mode()
@@ -90,6 +94,7 @@ def start_instance(library: Library, mode: str, *, runtime_switch: bool = True) 
                 raise
             inst.free()
             inst = Instance(library, name=library.next_name(mode))
+            inst.set_float64(given, [float(start_values[vr]) for vr in given])  # type: ignore
             inst.enter_initialization_mode(layout.start_time)
             inst.exit_initialization_mode()
             reconfigure(inst, True)

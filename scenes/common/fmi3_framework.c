@@ -48,6 +48,12 @@
  *   DEFECT_WRONG_ADJOINT           the adjoint alone doubles d(res[0])/d(w[0]) (DAE mode)
  *   DEFECT_ODE_DAE_INCONSISTENT    ODE mode solves g = 0.05 instead of g = 0
  *   DEFECT_RESET_KEEPS_SWITCH      fmi3Reset keeps the DAE switch and the first state
+ * and for the importer-path probes (tests/fixtures/defects/importers.py):
+ *   DEFECT_STATE_SET_IGNORED       fmi3SetFloat64 on a state returns fmi3OK in Continuous-Time Mode
+ *                                  but keeps the old value
+ *   DEFECT_STATE_SET_REFUSED       fmi3SetFloat64 on a state returns fmi3Error in Continuous-Time Mode
+ *   DEFECT_INDICATORS_STALE        event indicators computed from the previous evaluation's w
+ *   DEFECT_INDICATOR_COUNT         fmi3GetNumberOfEventIndicators says one more than there are
  * and for the simulation probes (tests/fixtures/defects/simulation.py), only for t > 0.5:
  *   DEFECT_LATE_JUMP               res[0] jumps by 1 (no event indicator)
  *   DEFECT_LATE_FAST               der[0] gains 1e5 cos(1e5 t)
@@ -121,6 +127,9 @@ typedef struct {
     double *vals, *x, *w, *u, *der, *res, *y;
     double *ind, *disc;                /* event indicators z, discrete variables d */
     double *xsave, *dsave;             /* x and d before the event hook */
+#ifdef DEFECT_INDICATORS_STALE
+    double *wlast;                     /* the w of the previous evaluation */
+#endif
 
     /* the model's Jacobian: pattern and values at the last evaluation */
     int nnz;
@@ -541,7 +550,12 @@ static fmi3Status update(Instance *c) {
     }
     if (!d->eval_valid) {
         eval_at(c, c->w, c->der, c->res, c->y);
+#ifdef DEFECT_INDICATORS_STALE
+        if (NZ > 0) indicators_at(c, c->wlast);   /* a cache keyed on t and x only */
+        memcpy(c->wlast, c->w, sizeof(double) * (size_t)NW);
+#else
         if (NZ > 0) indicators_at(c, c->w);
+#endif
         if (discard_reason) return discarded(c);
         d->eval_valid = 1;
     }
@@ -895,6 +909,9 @@ static int allocate(Instance *c) {
     c->ny = (double *)grab(c, (size_t)NY, sizeof(double));
     c->xsave = (double *)grab(c, (size_t)NX, sizeof(double));
     c->dsave = (double *)grab(c, (size_t)ND, sizeof(double));
+#ifdef DEFECT_INDICATORS_STALE
+    c->wlast = (double *)grab(c, nw, sizeof(double));
+#endif
     if (c->alloc_failed) return 0;
     return !MODEL.pattern || build_structure(c);
 }
@@ -1127,7 +1144,11 @@ static int may_set(const Instance *c, int kind) {
     const Data *d = &c->d;
     const int running = InitializationMode | EventMode | ContinuousTimeMode;
     switch (kind) {
+#ifdef DEFECT_STATE_SET_REFUSED
+    case K_X: return (d->state & (Instantiated | InitializationMode | EventMode)) != 0;
+#else
     case K_X:
+#endif
     case K_U: return (d->state & (Instantiated | running)) != 0;
 #ifdef DEFECT_W_NOT_SETTABLE
     case K_W: return d->state == Instantiated ||
@@ -1155,6 +1176,9 @@ fmi3Status fmi3SetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], 
     }
     for (k = 0; k < nvr; k++) {
         int kind = lookup(c, vr[k], &idx);
+#ifdef DEFECT_STATE_SET_IGNORED
+        if (kind == K_X && c->d.state == ContinuousTimeMode) continue;   /* "accepted" */
+#endif
         *slot(c, kind, idx) = values[k];
     }
     if (nvr) changed(&c->d);
@@ -1365,7 +1389,11 @@ fmi3Status fmi3GetEventIndicators(fmi3Instance instance, fmi3Float64 z[], size_t
 fmi3Status fmi3GetNumberOfEventIndicators(fmi3Instance instance, size_t *n) {
     BEGIN("fmi3GetNumberOfEventIndicators", NOT_CONFIG);
     if (!n) FAIL("fmi3GetNumberOfEventIndicators: NULL argument");
+#ifdef DEFECT_INDICATOR_COUNT
+    *n = (size_t)NZ + 1;   /* counts a removed indicator still */
+#else
     *n = (size_t)NZ;
+#endif
     return fmi3OK;
 }
 

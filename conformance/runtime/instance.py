@@ -190,6 +190,19 @@ class Instance:
                   out.ctypes.data_as(ctypes.POINTER(ctypes.c_double)), n)
         return out
 
+    def number_of_event_indicators(self) -> int:
+        """fmi3GetNumberOfEventIndicators."""
+        count = ctypes.c_size_t()
+        self._fmi("fmi3GetNumberOfEventIndicators", ctypes.byref(count))
+        return int(count.value)
+
+    def get_event_indicators(self, n: int) -> np.ndarray:
+        """fmi3GetEventIndicators for ``n`` indicators (the FMU checks ``n``)."""
+        out = np.zeros(n)
+        self._fmi("fmi3GetEventIndicators", out.ctypes.data_as(ctypes.POINTER(ctypes.c_double)),
+                  n)
+        return out
+
     # -- the Evaluator -------------------------------------------------------------------
 
     def set_point(self, point: Point, *, algebraic: bool = True) -> None:

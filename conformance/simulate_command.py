@@ -332,8 +332,9 @@ def run(args: argparse.Namespace) -> int:
 
 
 def summary(traj: Any) -> str:
-    """Two lines about one run: where it got, at what cost, and how it ended."""
-    state = "reached the stop time" if traj.ok else f"{traj.status}: {traj.message}"
+    """Two lines about one run (three with events): where it got, at what cost, how it ended."""
+    state = ("reached the stop time" if traj.ok and traj.terminated_at is None
+             else traj.message if traj.ok else f"{traj.status}: {traj.message}")
     init = traj.init or {}
     before = (init.get("residual_before") or {}).get("max_abs")
     after = (init.get("residual_after") or {}).get("max_abs")
@@ -348,7 +349,19 @@ def summary(traj: Any) -> str:
             f"  rtol {traj.rtol:g}, {traj.steps} steps, {traj.function_calls} "
             f"{'residual' if traj.mode == 'dae' else 'right-hand side'} and "
             f"{traj.jacobian_calls} Jacobian evaluations ({traj.jacobian}), {traj.fmi_calls} "
-            f"FMI calls, {traj.wall_s:.3f} s{residual}\n")
+            f"FMI calls, {traj.wall_s:.3f} s{residual}\n{_events_line(traj)}")
+
+
+def _events_line(traj: Any) -> str:
+    """The events of a run that watched event indicators or had one ("" otherwise)."""
+    if not traj.has_events:
+        return ""
+    times = traj.event_times
+    shown = ", ".join(f"{t:.6g}" for t in times[:5]) + (", ..." if len(times) > 5 else "")
+    return (f"  {traj.state_events} state event{'' if traj.state_events == 1 else 's'}, "
+            f"{traj.time_events} time event{'' if traj.time_events == 1 else 's'} "
+            f"({traj.indicators} event indicator{'' if traj.indicators == 1 else 's'})"
+            f"{f' at t = {shown}' if times else ''}\n")
 
 
 def _comparison_line(comparison: dict) -> str:

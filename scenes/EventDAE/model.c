@@ -13,6 +13,8 @@
  *   time event:  b = 0 -> 0.5 at t = 0.75 (announced as nextEventTime until then).
  * The hook decides with the same z the importer sees (from its w in DAE mode), so the event
  * it located is the event that happens.
+ * EVENTDAE_TERMINATE (a -D define): the time event asks to end the simulation
+ * (terminateSimulation), for the simulation's handling of it.
  */
 #include "dae_model.h"
 
@@ -64,6 +66,9 @@ static void event(double t, double x[], const double w[], const double u[], doub
     if (d[K] == K_LOW && z <= 0.0) d[K] = K_HIGH;
     else if (d[K] == K_HIGH && z >= 0.0) d[K] = K_LOW;
     if (d[B] == 0.0 && t >= T_EVENT - 1e-12) d[B] = B_AFTER;
+#ifdef EVENTDAE_TERMINATE
+    if (d[B] == B_AFTER) ev->terminate = fmi3True;   /* the run ends at the time event */
+#endif
     if (d[B] == 0.0) {
         ev->next_time_defined = fmi3True;
         ev->next_time = T_EVENT;

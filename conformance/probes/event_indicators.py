@@ -17,8 +17,9 @@ order (MS-06).
 """
 from __future__ import annotations
 
+import inspect
 import math
-from typing import Any, Iterator, Sequence
+from typing import Any, Callable, Iterator, Sequence
 
 import numpy as np
 
@@ -233,7 +234,24 @@ def _tolerance(layout: Layout, vr: int | None, x: float, y: float, rtol: float, 
             "atol": atol, "scale": "nominal or magnitude of the indicator"}
 
 
+# Shared with the simulation probes through ctx.facts (no family imports another): a run that
+# root-finds on indicators this family refuted is not the simulation's to blame.
+FAULT_FACT = "event_indicators.fault"
+
+
+def _noted(code: str, probe: Callable[..., Iterator[Violation]]) -> Callable[..., Any]:
+    """``probe``, recording its first violation in ``ctx.facts[FAULT_FACT]``."""
+    def run(ctx: ProbeContext, **options: Any) -> Iterator[Violation]:
+        for violation in probe(ctx, **options):
+            ctx.facts.setdefault(FAULT_FACT, f"{code}: {violation.message}")
+            yield violation
+    run.__wrapped__ = probe  # type: ignore[attr-defined]
+    run.__signature__ = inspect.signature(probe)  # type: ignore[attr-defined]
+    run.__name__ = probe.__name__
+    return run
+
+
 PROBES = {
-    "DAE732": event_indicators_failed,
-    "DAE733": event_indicators_inconsistent,
+    "DAE732": _noted("DAE732", event_indicators_failed),
+    "DAE733": _noted("DAE733", event_indicators_inconsistent),
 }

@@ -177,7 +177,7 @@ def call_failures(s: Survey, call: str) -> Iterator[Violation]:
     """The first refusal of the FMU's derivative function, if any (one finding, not one per
     point)."""
     for flag, point, exc in s.failures:
-        if flag != call:
+        if flag != call or exc.after is not None:  # after an earlier failure: a consequence
             continue
         fn = "fmi3GetDirectionalDerivative" if call == "directional" else "fmi3GetAdjointDerivative"
         yield Violation(

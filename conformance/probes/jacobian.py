@@ -20,6 +20,7 @@ import numpy as np
 from ..numerics import colouring as col
 from ..numerics import measure, numdiff
 from .api import Evaluator, FmiError, Point, ProbeContext, ProbeSkipped
+from .common import renew
 from .jacobian_layout import JacobianLayout, build_layout
 
 log = logging.getLogger(__name__)
@@ -128,6 +129,9 @@ def run_survey(ctx: ProbeContext, settings: Settings) -> Survey:
     rng = np.random.default_rng((ctx.seed, 740))
     start_time = min((p.t for p in ctx.points), default=0.0)
     for point in ctx.points:
+        failed = getattr(ctx.dae, "failure", None) is not None  # Terminated (SM-04)
+        if failed and renew(ctx, "dae") is None:
+            break
         measured = _measure_point(ctx.dae, layout, point, result, colouring, row_colouring,
                                   rng, settings, start_time)
         if measured is not None:

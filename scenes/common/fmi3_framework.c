@@ -36,6 +36,8 @@
  *   DEFECT_ODE_DERIVATIVES_FAIL    ODE mode: fmi3GetContinuousStateDerivatives returns fmi3Error
  *   DEFECT_DAE_INIT_REFUSED        DAE mode: fmi3ExitInitializationMode returns fmi3Error
  *   DEFECT_W_NOT_SETTABLE          DAE mode: w cannot be set in Continuous-Time Mode
+ *   DEFECT_INPUT_NOT_SETTABLE      DAE mode: fmi3SetFloat64 on an input returns fmi3Error in
+ *                                  Continuous-Time Mode and the instance goes to Terminated
  *   DEFECT_EVAL_ERROR_AFTER_START  DAE mode: reading residuals fails once time has advanced
  *   DEFECT_MISSING_EXPORT          fmi3GetClock is not exported
  *   DEFECT_DAE_ONLY                always in DAE mode, as if the switch were stuck at true
@@ -1198,6 +1200,12 @@ fmi3Status fmi3SetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], 
         if (!may_set(c, kind))
             FAIL("fmi3SetFloat64: variable %u cannot be set in %s%s", (unsigned)vr[k],
                  state_name(c->d.state), kind == K_W && !c->d.dae ? " (ODE mode)" : "");
+#ifdef DEFECT_INPUT_NOT_SETTABLE
+        if (kind == K_U && c->d.dae && c->d.state == ContinuousTimeMode) {
+            c->d.state = Terminated;   /* after fmi3Error only Terminated is left (SM-04) */
+            FAIL("fmi3SetFloat64: input %u cannot be set in DAE mode", (unsigned)vr[k]);
+        }
+#endif
     }
     for (k = 0; k < nvr; k++) {
         int kind = lookup(c, vr[k], &idx);

@@ -222,6 +222,13 @@ def row_scale(layout: JacobianLayout, e: measure.Entries, *,
     return np.bincount(e.rows, weights=weights, minlength=len(layout.rows))
 
 
+def base_point(layout: JacobianLayout, ps: PointSurvey) -> Point:
+    """The point a survey point was measured at, every known set (time from its column)."""
+    t = next((float(v) for c, v in zip(layout.cols, ps.x) if c.role == "time"), ps.point.t)
+    values = {c.vr: float(v) for c, v in zip(layout.cols, ps.x) if c.role != "time"}
+    return Point(t, values, ps.point.label)
+
+
 def point_evidence(layout: JacobianLayout, ps: PointSurvey, limit: int = 20) -> dict:
     values = {c.name: float(v) for c, v in zip(layout.cols, ps.x) if c.role != "time"}
     shown = dict(list(values.items())[:limit])

@@ -27,6 +27,7 @@ import numpy as np
 from ..findings import Violation, evidence
 from .api import FmiError, ProbeContext, ProbeSkipped
 from .entry_comparison import (
+    OPTIONS_FACT,
     call_failures,
     closest_entries,
     entry_errors,
@@ -109,6 +110,7 @@ def _single_entry_adjoint(ctx: ProbeContext, s: Survey, worst: dict) -> dict:
 def directional_derivative_mismatch(ctx: ProbeContext, *, rtol: float,
                                     margin: float, ulps: float) -> Iterator[Violation]:
     """fmi3GetDirectionalDerivative against finite differences of the function (DAE-50)."""
+    ctx.facts[OPTIONS_FACT] = {"rtol": rtol, "margin": margin, "ulps": ulps}  # "confirmed"
     found, _ = _against_fd(ctx, surveyed(ctx), "dd", "DAE740", rtol=rtol, margin=margin,
                            ulps=ulps)
     yield from found

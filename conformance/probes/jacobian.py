@@ -214,12 +214,9 @@ def record_errors(ctx: ProbeContext, code: str, items: list[tuple[str, float, fl
 # ------------------------------------------------------------------------------ shared helpers
 
 def row_scale(layout: JacobianLayout, e: measure.Entries, *,
-               declared_only: bool = False) -> np.ndarray:
+              declared_only: bool = False) -> np.ndarray:
     """S_i = sum_j |J_ij| * nominal_j over the measured entries of each row, shape (m,)."""
-    weights = np.abs(np.nan_to_num(e.fd)) * layout.nominal[e.cols]
-    if declared_only:
-        weights = weights * e.declared
-    return np.bincount(e.rows, weights=weights, minlength=len(layout.rows))
+    return measure.row_scale(e, layout.nominal, len(layout.rows), declared_only=declared_only)
 
 
 def base_point(layout: JacobianLayout, ps: PointSurvey) -> Point:

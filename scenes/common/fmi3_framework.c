@@ -38,6 +38,7 @@
  *   DEFECT_W_NOT_SETTABLE          DAE mode: w cannot be set in Continuous-Time Mode
  *   DEFECT_INPUT_NOT_SETTABLE      DAE mode: fmi3SetFloat64 on an input returns fmi3Error in
  *                                  Continuous-Time Mode and the instance goes to Terminated
+ *   DEFECT_ZERO_DIRECTIONAL        fmi3GetDirectionalDerivative returns zeros (fmi3OK)
  *   DEFECT_EVAL_ERROR_AFTER_START  DAE mode: reading residuals fails once time has advanced
  *   DEFECT_MISSING_EXPORT          fmi3GetClock is not exported
  *   DEFECT_DAE_ONLY                always in DAE mode, as if the switch were stuck at true
@@ -943,8 +944,19 @@ fmi3Status fmi3GetDirectionalDerivative(fmi3Instance instance,
         return fmi3Fatal;
     }
 #endif
+#ifdef DEFECT_ZERO_DIRECTIONAL
+    {
+        fmi3Status status = partial_derivatives(instance, "fmi3GetDirectionalDerivative", 0,
+            unknowns, nUnknowns, knowns, nKnowns, seed, nSeed, sensitivity, nSensitivity);
+        size_t i;
+        if (status == fmi3OK)   /* a stub that never computes anything */
+            for (i = 0; i < nSensitivity; i++) sensitivity[i] = 0.0;
+        return status;
+    }
+#else
     return partial_derivatives(instance, "fmi3GetDirectionalDerivative", 0, unknowns, nUnknowns,
                                knowns, nKnowns, seed, nSeed, sensitivity, nSensitivity);
+#endif
 }
 
 fmi3Status fmi3GetAdjointDerivative(fmi3Instance instance,

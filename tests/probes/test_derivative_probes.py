@@ -278,6 +278,53 @@ def test_wrong_partial_behind_both_functions_is_reported_for_each():
     assert [v.subject for v in result["DAE741"]] == ["d(der(x1))/d(x1)"]
 
 
+def _zeros(jac, unknowns, knowns):
+    return np.zeros_like(jac)
+
+
+@pytest.mark.parametrize("scene", sorted(TWINS))
+def test_zero_derivatives_of_both_functions_are_both_findings_and_nothing_else(scene):
+    # every scene claims both functions (providesDirectional/AdjointDerivatives)
+    assert set(found(make_ctx(scene, dd_hook=_zeros))) == {"DAE740", "DAE741"}
+
+
+@pytest.mark.parametrize("seed", range(5))
+@pytest.mark.parametrize("scene", sorted(TWINS))
+def test_zero_directional_derivatives_are_not_used_for_dgdw(scene, seed):
+    # correct equations, directional derivatives all zero, the adjoint right: the derivative
+    # finding only, not a singular dg/dw built from the zeros
+    result = found(make_ctx(scene, seed=seed, directional_hook=_zeros))
+    assert set(result) == {"DAE740"}
+
+
+def test_singular_dgdw_is_found_from_finite_differences_when_the_derivatives_are_refuted():
+    twin = _hello_with(lambda t, x, w, u: [w[0] + 2 * w[1] - x[0], 2 * w[0] + 4 * w[1] - 2 * x[0]])
+    result = found(make_ctx("HelloWorldDAE", twin=twin, directional_hook=_zeros))
+    assert set(result) == {"DAE740", "DAE746"}
+    ev = dict(result["DAE746"][0].evidence)
+    assert ev["source"] == "finite differences"
+    assert "not used" in ev["note"] and ev["measurement_error"] >= 0
+    assert set(ev["involved"]) == {"y", "z"}
+
+
+def test_dgdw_uses_confirmed_directional_derivatives_without_a_note():
+    twin = _hello_with(lambda t, x, w, u: [w[0] + 2 * w[1] - x[0], 2 * w[0] + 4 * w[1] - 2 * x[0]])
+    (v,) = found(make_ctx("HelloWorldDAE", twin=twin))["DAE746"]
+    ev = dict(v.evidence)
+    assert ev["source"] == "fmi3GetDirectionalDerivative"
+    assert "note" not in ev and "measurement_error" not in ev
+
+
+def test_directional_verdict_uses_the_options_of_directional_derivative_mismatch():
+    from conformance.probes.entry_comparison import OPTIONS_FACT, directional_verdict
+
+    ctx = make_ctx("SimpleDAE", directional_hook=_wrong(2, 1, 1.0 + 1e-4))
+    s = D.survey(ctx)
+    assert directional_verdict(ctx, s)[0] is False      # the catalogue's rtol 1e-5
+    ctx.facts[OPTIONS_FACT] = {**ctx.facts[OPTIONS_FACT], "rtol": 1e-2}
+    assert directional_verdict(ctx, s) == (True, "")    # as DAE740 ran: confirmed
+
+
 def test_wrong_adjoint_only_is_an_adjoint_mismatch():
     ctx = make_ctx("SimpleDAE", adj_hook=_wrong(12, 6, 2.0))
     result = found(ctx)

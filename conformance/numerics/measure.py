@@ -6,7 +6,8 @@ its declared columns is caught for free, and the zeros hidden behind a declared 
 same group are checked along a few random directions through every column (the function must
 move as the declared entries predict). Only rows found suspicious are measured again column by
 column. It returns the measured entries with their error estimates; the caller (a probe rule)
-compares them with its tolerances.
+compares them with its tolerances (:func:`disagreement` is the comparison they share with the
+simulation's check of the FMU's Jacobian).
 """
 from __future__ import annotations
 
@@ -222,3 +223,25 @@ def _localise(table, suspects, pattern, fun, dd, adj, sources, active, steps, me
     dtypes = (np.intp, np.intp, bool, float, float, float, bool, float, float)
     return [np.concatenate([old, np.asarray(new, dtype=dt)])
             for old, new, dt in zip(table, extra, dtypes)]
+
+
+def row_scale(e: Entries, nominal: np.ndarray, m: int, *,
+              declared_only: bool = False) -> np.ndarray:
+    """S_i = sum_j |J_ij| * nominal_j over the measured entries of each row, shape (m,):
+    how much the unknown moves when each known moves by its nominal."""
+    weights = np.abs(np.nan_to_num(e.fd)) * nominal[e.cols]
+    if declared_only:
+        weights = weights * e.declared
+    return np.bincount(e.rows, weights=weights, minlength=m)
+
+
+def disagreement(e: Entries, values: np.ndarray, nominal: np.ndarray, m: int, *, rtol: float,
+                 margin: float, ulps: float
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """How far ``values`` (the FMU's entries, shape (k,)) are from the finite differences:
+    ``|values - fd|``, the tolerance ``margin * error + rtol * S_i / nominal_j``, the error
+    estimate of ``fd`` for a noise of ``ulps``, and ``S_i / nominal_j`` (each of shape (k,)).
+    An entry disagrees where the first exceeds the second."""
+    scale = row_scale(e, nominal, m)[e.rows] / nominal[e.cols]
+    err = e.error(ulps)
+    return np.abs(values - e.fd), margin * err + rtol * scale, err, scale

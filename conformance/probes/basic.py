@@ -1,12 +1,17 @@
-"""The basic probes: setting algebraic variables, consistency at the start, repeatability,
-non-finite values and failing evaluations (the enable handshake is in handshake.py).
+"""The basic probes: setting algebraic variables and inputs, consistency at the start,
+repeatability, non-finite values and failing evaluations (the enable handshake is in
+handshake.py).
 
 Each probe runs in the worker process on a :class:`~conformance.probes.api.ProbeContext` whose
 ``facts`` hold the :class:`~conformance.runtime.layout.Layout` (``"layout"``) and the loaded
 :class:`~conformance.runtime.library.Library` (``"library"``), and yields violations. Tolerances
 are catalogue options. One fault, one finding: a probe that cannot set a point or start DAE mode
 raises :class:`ProbeSkipped` (or lets the :class:`FmiError` escape), and the rule that owns the
-fault reports it; non-finite values are left to ``nan-or-inf``.
+fault reports it: ``evaluation-failed`` time and states, ``algebraic-not-settable`` the algebraic
+variables, ``input-not-settable`` the inputs (the :class:`KnownNotSet` of a refused set says
+which). A call that returned fmi3Error puts the instance in Terminated (SM-04): what fails on it
+afterwards is a consequence, reported by nobody, and a probe that goes on takes a fresh
+instance. Non-finite values are left to ``nan-or-inf``.
 """
 from __future__ import annotations
 
@@ -16,7 +21,7 @@ from typing import Any, Iterator
 import numpy as np
 
 from ..findings import Location, Violation, evidence
-from .api import FmiError, Point, ProbeContext
+from .api import FmiError, Point, ProbeContext, ProbeSkipped
 from .common import (
     close,
     dae_of,
@@ -25,12 +30,13 @@ from .common import (
     fresh_instance,
     layout_of,
     manifest_location,
+    renew,
     root_location,
     unknown_location,
     unknowns_of,
     var_location,
 )
-from ..runtime.instance import Instance, PointNotSet
+from ..runtime.instance import Instance, KnownNotSet, PointNotSet
 from ..runtime.layout import Layout
 from .sampling import within
 
@@ -46,9 +52,14 @@ def algebraic_not_settable(ctx: ProbeContext, *, step: float, rtol: float,
     dae = dae_of(ctx)
     layout = layout_of(ctx)
     start = ctx.points[0]
-    dae.set_point(start, algebraic=False)
+    _set_knowns(dae, start)
     rejected = False
     for vr in layout.algebraic:  # each on its own, at its value of the start point
+        if getattr(dae, "failure", None) is not None:  # refused: Terminated (SM-04)
+            dae = renew(ctx, "dae")
+            if dae is None:
+                return
+            _set_knowns(dae, start)
         value = start.values.get(vr, layout.start.get(vr, 0.0))
         try:
             dae.set_float64([vr], [value])
@@ -71,6 +82,15 @@ def algebraic_not_settable(ctx: ProbeContext, *, step: float, rtol: float,
     for vr in chosen:
         yield from _set_one(ctx, dae, layout, start, vr, watch, base, step=step, rtol=rtol,
                             react_rtol=react_rtol)
+
+
+def _set_knowns(dae: Instance, point: Point) -> None:
+    """Time, states and inputs of ``point``; PointNotSet (the probe is skipped) naming what
+    was refused when that fails: evaluation-failed or input-not-settable reports it."""
+    try:
+        dae.set_point(point, algebraic=False)
+    except FmiError as exc:
+        raise PointNotSet(point, exc) from None
 
 
 def _set_one(ctx: ProbeContext, dae: Instance, layout: Layout, start: Point, vr: int,
@@ -279,32 +299,43 @@ def _directional(ctx: ProbeContext, layout: Layout, dae: Instance,
 
 
 def evaluation_failed(ctx: ProbeContext) -> Iterator[Violation]:
-    """DAE-41: in DAE mode, at every sampled point, time, states and inputs can be set and the
+    """DAE-41: in DAE mode, at every sampled point, time and states can be set and the
     residuals, derivatives and outputs read (fmi3GetFloat64, fmi3GetContinuousStateDerivatives).
-    A rejected algebraic variable is algebraic-not-settable's finding: the probe is skipped."""
+    A rejected input is input-not-settable's finding, a rejected algebraic variable
+    algebraic-not-settable's: the probe is skipped. The first failing call at a point is the
+    finding; it put the instance in Terminated (SM-04), so the next point is evaluated on a
+    fresh instance, and a call that fails after an earlier failure on the same instance is
+    not reported."""
     dae = dae_of(ctx)
     layout = layout_of(ctx)
     unknowns = unknowns_of(layout)
     for point in ctx.points:
+        if getattr(dae, "failure", None) is not None:
+            dae = renew(ctx, "dae")
+            if dae is None:
+                return
         try:
             dae.set_point(point, algebraic=False)
         except FmiError as exc:
+            kind = exc.kind if isinstance(exc, KnownNotSet) else ""
+            if exc.after is not None or kind not in ("time", "states"):
+                raise PointNotSet(point, exc) from None  # not a fault of time or states
             yield Violation(
-                f"setting time, states and inputs in DAE mode fails at point {point.label}: "
+                f"setting the {kind} in DAE mode fails at point {point.label}: "
                 f"{exc.call} returned {exc.status}", root_location(ctx),
-                evidence(error_evidence(exc), point=point.label, t=point.t), subject=exc.call)
+                evidence(error_evidence(exc), point=point.label, t=point.t, setting=kind,
+                         mode="DAE mode, Continuous-Time Mode"), subject=exc.call)
             continue
-        values = [point.values[vr] for vr in layout.algebraic if vr in point.values]
         try:
-            dae.set_float64([vr for vr in layout.algebraic if vr in point.values], values)
+            dae.set_algebraic(point)
         except FmiError as exc:  # algebraic-not-settable reports it
             raise PointNotSet(point, exc) from None
-        for call, read in (("fmi3GetFloat64", lambda: dae.get_float64(unknowns)),
-                           ("fmi3GetContinuousStateDerivatives",
-                            lambda: dae.get_derivatives(len(layout.states)))):
+        for read, arg in ((dae.get_float64, unknowns), (dae.get_derivatives, len(layout.states))):
             try:
-                read()
+                read(arg)
             except FmiError as exc:
+                if exc.after is not None:
+                    raise ProbeSkipped(exc.cause()) from None
                 yield Violation(
                     f"reading the residuals, derivatives and outputs in DAE mode fails at "
                     f"point {point.label}: {exc.call} returned {exc.status}",
@@ -315,10 +346,48 @@ def evaluation_failed(ctx: ProbeContext) -> Iterator[Violation]:
                 break
 
 
+# ------------------------------------------------------------------------ input-not-settable
+
+
+def input_not_settable(ctx: ProbeContext) -> Iterator[Violation]:
+    """SG-05: in Continuous-Time Mode every continuous input accepts fmi3SetFloat64, in DAE
+    mode and in ODE mode. Each input is set on its own, to its value at the start point; a
+    refusal names the call, the input, its value reference, the mode and the FMU's log. A
+    refused call puts the instance in Terminated (SM-04): the next input is tried on a fresh
+    instance."""
+    layout = layout_of(ctx)
+    if not layout.inputs:
+        return
+    if ctx.dae is None and ctx.ode is None:
+        dae_of(ctx)  # ProbeSkipped: no mode could be started
+    start = ctx.points[0]
+    for mode in ("dae", "ode"):
+        inst = getattr(ctx, mode)
+        for vr in layout.inputs:
+            if inst is None:
+                break
+            value = start.values.get(vr, layout.start.get(vr, 0.0))
+            try:
+                inst.set_float64([vr], [value])
+            except FmiError as exc:
+                if exc.after is not None:
+                    raise ProbeSkipped(exc.cause()) from None
+                yield Violation(
+                    f"fmi3SetFloat64 on the continuous input {{subject}} (valueReference {vr}) "
+                    f"returns {exc.status} in {mode.upper()} mode, Continuous-Time Mode, where "
+                    "FMI 3.0 allows setting it (SG-05)", var_location(ctx, vr),
+                    evidence(error_evidence(exc), value_reference=vr, value=value,
+                             mode=f"{mode.upper()} mode", state="Continuous-Time Mode",
+                             point=start.label), layout.name(vr))
+                if getattr(inst, "failure", None) is not None:
+                    inst = renew(ctx, mode)
+
+
 PROBES = {
     "DAE720": algebraic_not_settable,
     "DAE721": initial_residual_nonzero,
     "DAE722": evaluation_not_repeatable,
     "DAE723": nan_or_inf,
     "DAE724": evaluation_failed,
+    "DAE725": input_not_settable,
 }

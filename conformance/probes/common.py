@@ -90,6 +90,31 @@ def new_instance(library: Library, label: str) -> Instance:
     return Instance(library, name=library.next_name(label))
 
 
+def renew(ctx: ProbeContext, mode: str) -> Any:
+    """A fresh instance in Continuous-Time Mode in ``mode`` in place of ``ctx.dae`` or
+    ``ctx.ode`` (the old one freed), or None, with the reason in ``ctx.facts``, when it cannot
+    be started. For an instance with a failed call: fmi3Error put it in Terminated (SM-04), so
+    whatever fails on it later is a consequence, not something to report."""
+    old = getattr(ctx, mode)
+    if old is not None:
+        old.free()
+    try:
+        new = ctx.new_instance(mode)
+    except (FmiError, ProbeSkipped) as exc:
+        new = None
+        ctx.facts[f"{mode}_error"] = exc
+    setattr(ctx, mode, new)
+    return new
+
+
+def renew_failed(ctx: ProbeContext) -> None:
+    """Renew ``ctx.dae`` and ``ctx.ode`` where an earlier call returned fmi3Error (see
+    :func:`renew`): the probe stage does it before each probe."""
+    for mode in ("dae", "ode"):
+        if getattr(getattr(ctx, mode), "failure", None) is not None:
+            renew(ctx, mode)
+
+
 @contextlib.contextmanager
 def fresh_instance(ctx: ProbeContext, mode: str) -> Iterator[Instance]:
     """A new instance in Continuous-Time Mode in ``mode``, freed afterwards."""

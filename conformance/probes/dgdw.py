@@ -1,10 +1,14 @@
 """Probes of dg/dw and of ODE against DAE mode (DAE745-DAE747), on the Jacobian survey.
 
 * ``algebraic-jacobian-ill-conditioned`` / ``-singular``: the condition number of dg/dw at the
-  sampling points, scaled by nominals, from the FMU's directional derivatives (else finite
-  differences);
+  sampling points, scaled by nominals, from the FMU's directional derivatives when the survey
+  confirmed them (else finite differences, whose error bound then also counts as singular);
 * ``ode-dae-inconsistent``: at the same (t, x, u), solve g = 0 for w by Newton with the FMU's
-  dg/dw from the w that ODE mode gives, and compare the derivatives and outputs of both modes.
+  dg/dw (if confirmed, else central differences) from the w that ODE mode gives, and compare
+  the derivatives and outputs of both modes.
+
+No verdict rests on derivatives the probes refuted (directional-derivative-mismatch): see
+:func:`conformance.probes.entry_comparison.directional_verdict`.
 
 Registered through ``conformance.probes.derivatives.PROBES`` (the derivative family).
 """
@@ -18,12 +22,28 @@ import numpy as np
 from ..findings import Violation, evidence
 from ..numerics import numdiff
 from .api import Evaluator, FmiError, Point, ProbeContext, ProbeSkipped
+from .entry_comparison import directional_options, directional_verdict
 from .jacobian import PointSurvey, Survey, point_evidence, row_scale, surveyed
 
 
-def _algebraic_blocks(s: Survey) -> Iterator[tuple[PointSurvey, np.ndarray, str]]:
+@dataclass
+class _Block:
+    """dg/dw at one point, scaled; ``error`` the 2-norm bound (Frobenius) of its measurement
+    error, scaled the same way (0 for the FMU's own, confirmed derivatives)."""
+
+    ps: PointSurvey
+    g: np.ndarray
+    error: float
+    source: str
+    note: str
+
+
+def _algebraic_blocks(ctx: ProbeContext, s: Survey) -> Iterator[_Block]:
     """dg/dw at every point, scaled: columns by the algebraic variables' nominals, rows by the
-    residuals' nominals when declared, else equilibrated (a residual's scale is arbitrary)."""
+    residuals' nominals when declared, else equilibrated (a residual's scale is arbitrary).
+    From the FMU's directional derivatives only when the survey confirmed them, else from
+    finite differences, with their error estimates (``margin`` times, as
+    directional-derivative-mismatch counts them) and a note why the FMU's were not used."""
     layout = s.layout
     assert layout is not None
     res = layout.indices("residual", of="rows")
@@ -32,22 +52,30 @@ def _algebraic_blocks(s: Survey) -> Iterator[tuple[PointSurvey, np.ndarray, str]
         return  # residual-count-mismatch (static) explains a non-square dg/dw
     rpos = {int(i): a for a, i in enumerate(res)}
     cpos = {int(j): a for a, j in enumerate(alg)}
-    source = "fmi3GetDirectionalDerivative" if s.directional else "finite differences"
+    use, note = directional_verdict(ctx, s)
+    options = directional_options(ctx)
+    source = "fmi3GetDirectionalDerivative" if use else "finite differences"
     for ps in s.points:
         e = ps.entries
+        err = e.error(options["ulps"]) * options["margin"]
         g = np.zeros((res.size, alg.size))
+        bound = np.zeros((res.size, alg.size))
         for k, (i, j) in enumerate(zip(e.rows.tolist(), e.cols.tolist())):
             if i in rpos and j in cpos:
-                value = e.dd[k] if s.directional and not np.isnan(e.dd[k]) else e.fd[k]
-                g[rpos[i], cpos[j]] = value
+                direct = use and not np.isnan(e.dd[k])
+                g[rpos[i], cpos[j]] = e.dd[k] if direct else e.fd[k]
+                bound[rpos[i], cpos[j]] = 0.0 if direct else err[k]
         if not np.all(np.isfinite(g)):
             continue  # nan-or-inf reports it
         g = g * layout.nominal[alg][None, :]
+        bound = bound * layout.nominal[alg][None, :]
         for a, i in enumerate(res):
             nominal = layout.rows[i].nominal
             biggest = np.abs(g[a]).max(initial=0.0)
-            g[a] = g[a] / nominal if nominal else (g[a] / biggest if biggest > 0 else g[a])
-        yield ps, g, source
+            divisor = nominal if nominal else (biggest if biggest > 0 else 1.0)
+            g[a], bound[a] = g[a] / divisor, bound[a] / divisor
+        yield _Block(ps, g, float(np.linalg.norm(np.nan_to_num(bound, posinf=np.inf))),
+                     source, note)
 
 
 def _algebraic_survey(ctx: ProbeContext) -> Survey:
@@ -61,36 +89,42 @@ def _algebraic_survey(ctx: ProbeContext) -> Survey:
     return s
 
 
-def _condition(g: np.ndarray) -> tuple[float, bool, np.ndarray]:
-    """2-norm condition number, whether numerically singular (smallest singular value below
-    max(shape) * eps * largest, numpy's matrix_rank criterion), and the direction of the
-    smallest singular value (which algebraic variables the near-singularity involves)."""
+def _condition(g: np.ndarray, error: float = 0.0) -> tuple[float, bool, np.ndarray]:
+    """2-norm condition number, whether numerically singular, and the direction of the
+    smallest singular value (which algebraic variables the near-singularity involves).
+    Singular: the smallest singular value is at most max(shape) * eps * largest (numpy's
+    matrix_rank criterion), or at most ``error``, the 2-norm bound of the measurement error
+    of ``g`` (Weyl: a matrix that close to g may be singular)."""
     if not np.all(np.isfinite(g)):
         return np.inf, True, np.zeros(g.shape[1])
     _, sv, vt = np.linalg.svd(g)
     if sv[0] == 0:
         return np.inf, True, vt[-1]
-    singular = sv[-1] <= sv[0] * max(g.shape) * numdiff.EPS
+    singular = sv[-1] <= max(sv[0] * max(g.shape) * numdiff.EPS, error)
     return (float(sv[0] / sv[-1]) if sv[-1] > 0 else np.inf), bool(singular), vt[-1]
 
 
-def _worst_condition(s: Survey, singular: bool) -> tuple | None:
+def _worst_condition(ctx: ProbeContext, s: Survey, singular: bool) -> tuple | None:
     worst = None
-    for ps, g, source in _algebraic_blocks(s):
-        cond, is_singular, direction = _condition(g)
+    for b in _algebraic_blocks(ctx, s):
+        cond, is_singular, direction = _condition(b.g, b.error)
         if is_singular == singular and (worst is None or cond > worst[1]):
-            worst = (ps, cond, direction, source, g.shape[0])
+            worst = (b.ps, cond, direction, b.source, b.g.shape[0], b.note, b.error)
     return worst
 
 
 def _condition_violation(s: Survey, found: tuple, message: str, **extra) -> Violation:
     layout = s.layout
     assert layout is not None
-    ps, cond, direction, source, n = found
+    ps, cond, direction, source, n, note, error = found
     alg = layout.indices("algebraic")
     order = np.argsort(-np.abs(direction))[:5]
     involved = [layout.cols[alg[k]].name for k in order if abs(direction[k]) > 1e-3]
     res = layout.indices("residual", of="rows")
+    if source == "finite differences":
+        extra["measurement_error"] = error
+    if note:
+        extra["note"] = note
     return Violation(message, layout.rows[res[0]].location, evidence(
         condition_number=cond if np.isfinite(cond) else "inf", size=n, source=source,
         scale="columns by the algebraic variables' nominal values, rows by the residuals' "
@@ -102,7 +136,7 @@ def algebraic_jacobian_ill_conditioned(ctx: ProbeContext, *, max_condition: floa
                                        ) -> Iterator[Violation]:
     """The scaled dg/dw has a condition number above ``max_condition`` (but is not singular)."""
     s = _algebraic_survey(ctx)
-    found = _worst_condition(s, singular=False)
+    found = _worst_condition(ctx, s, singular=False)
     if found is not None and found[1] > max_condition:
         yield _condition_violation(
             s, found, "dg/dw, the Jacobian of the residuals with respect to the algebraic "
@@ -113,12 +147,13 @@ def algebraic_jacobian_ill_conditioned(ctx: ProbeContext, *, max_condition: floa
 def algebraic_jacobian_singular(ctx: ProbeContext) -> Iterator[Violation]:
     """The scaled dg/dw is numerically singular at a sampling point (DAE-51)."""
     s = _algebraic_survey(ctx)
-    found = _worst_condition(s, singular=True)
+    found = _worst_condition(ctx, s, singular=True)
     if found is not None:
         yield _condition_violation(
             s, found, "dg/dw, the Jacobian of the residuals with respect to the algebraic "
             "variables, is singular: the DAE does not have index 1 here",
-            threshold=f"smallest singular value <= {found[4]} * eps * largest")
+            threshold=f"smallest singular value <= {found[4]} * eps * largest"
+            + (" or <= the measurement error" if found[3] == "finite differences" else ""))
 
 
 # ------------------------------------------------------------------------- ODE against DAE
@@ -241,7 +276,8 @@ def _compare_modes(ctx, s: Survey, ps: PointSurvey, res_i, cmp_i, alg_j, res, cm
             solve = _Solve(w0, g0, 0, True)
         else:
             solve = _newton(ctx.dae, base, res, alg, w0, layout.nominal[alg_j],
-                            noise[res_i], res_tol, s.directional, max_iterations)
+                            noise[res_i], res_tol, directional_verdict(ctx, s)[0],
+                            max_iterations)
         at = Point(base.t, {**base.values, **dict(zip(alg, solve.w.tolist()))}, base.label)
         dae = ctx.dae.evaluate(at, cmp)
     except (FmiError, np.linalg.LinAlgError):

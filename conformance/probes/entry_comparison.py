@@ -3,6 +3,10 @@
 Each entry ``J_ij`` is compared in units of the row's scale ``S_i = sum_j |J_ij| * nominal_j``;
 a difference counts only when it exceeds ``margin`` times the finite-difference error estimate
 plus ``rtol * S_i / nominal_j``. The tolerances are the calling rule's catalogue options.
+
+:func:`directional_verdict` says whether the FMU's directional derivatives may be used by
+other verdicts (dg/dw) and by the simulation: only when the survey confirmed them, judged with
+the options of ``directional-derivative-mismatch``.
 """
 from __future__ import annotations
 
@@ -11,7 +15,10 @@ from typing import Iterator, Mapping
 
 import numpy as np
 
+from ..catalogue import default_catalogue
 from ..findings import Violation, evidence
+from ..numerics import measure
+from .api import ProbeContext
 from .jacobian import PointSurvey, Survey, point_evidence, row_scale
 from .jacobian_layout import JacobianLayout
 
@@ -37,9 +44,9 @@ def compared_entries(layout: JacobianLayout, e, which: str, *, rtol: float, marg
     """The FMU's values, |FMU - FD|, the tolerance, the FD error estimate and the scale of
     every measured entry at one point (each of shape (nnz,))."""
     fmu = e.dd if which == "dd" else e.adj
-    scale = row_scale(layout, e)[e.rows] / layout.nominal[e.cols]
-    err = e.error(ulps)
-    return fmu, np.abs(fmu - e.fd), margin * err + rtol * scale, err, scale
+    diff, tol, err, scale = measure.disagreement(e, fmu, layout.nominal, len(layout.rows),
+                                                 rtol=rtol, margin=margin, ulps=ulps)
+    return fmu, diff, tol, err, scale
 
 
 def closest_entries(s: Survey, which: str, *, rtol: float, margin: float, ulps: float,
@@ -74,12 +81,9 @@ def mismatched_entries(s: Survey, which: str, *, rtol: float, margin: float, ulp
         e = ps.entries
         fmu, diff, tol, err, scale = compared_entries(layout, e, which, rtol=rtol, margin=margin,
                                                ulps=ulps)
-        bad = np.isfinite(fmu) & np.isfinite(e.fd) & (diff > tol)  # non-finite: nan-or-inf
-        if which == "adj":
-            # An adjoint that equals a wrong directional derivative is the same fault, reported
-            # once by directional-derivative-mismatch: here only what is the adjoint's own.
-            shared = np.abs(e.adj - e.dd) <= rtol * scale + margin * err
-            bad &= ~(shared & (np.abs(e.dd - e.fd) > tol))
+        # non-finite: nan-or-inf. An adjoint as wrong as the directional derivative is a finding
+        # of its own: an importer may call only one of the two functions.
+        bad = np.isfinite(fmu) & np.isfinite(e.fd) & (diff > tol)
         for k in np.flatnonzero(bad):
             keep_worst(worst, (int(e.rows[k]), int(e.cols[k])),
                         float(diff[k] / tol[k]) if tol[k] > 0 else np.inf, ps,
@@ -177,7 +181,7 @@ def call_failures(s: Survey, call: str) -> Iterator[Violation]:
     """The first refusal of the FMU's derivative function, if any (one finding, not one per
     point)."""
     for flag, point, exc in s.failures:
-        if flag != call:
+        if flag != call or exc.after is not None:  # after an earlier failure: a consequence
             continue
         fn = "fmi3GetDirectionalDerivative" if call == "directional" else "fmi3GetAdjointDerivative"
         yield Violation(
@@ -186,3 +190,41 @@ def call_failures(s: Survey, call: str) -> Iterator[Violation]:
             evidence=evidence(call=exc.call, status=exc.status, log=list(exc.log)[:10],
                               point=point.label))
         return
+
+
+# ------------------------------------------------------ may the FMU's derivatives be used?
+
+DIRECTIONAL_RULE = "directional-derivative-mismatch"
+OPTIONS_FACT = "derivatives.directional_options"
+
+
+def directional_options(ctx: ProbeContext) -> dict:
+    """The options of directional-derivative-mismatch (``rtol``, ``margin``, ``ulps``): as it ran
+    in this worker (it records them), else its catalogue defaults. What "confirmed" means for
+    every use of the FMU's directional derivatives."""
+    options = ctx.facts.get(OPTIONS_FACT)
+    if not isinstance(options, dict):
+        rule = default_catalogue().get(DIRECTIONAL_RULE)
+        options = {k: v for k, v in (rule.option_values if rule else {}).items()
+                   if k in ("rtol", "margin", "ulps")}
+        ctx.facts[OPTIONS_FACT] = options
+    return options
+
+
+def directional_verdict(ctx: ProbeContext, s: Survey) -> tuple[bool, str]:
+    """(use, note): whether the FMU's directional derivatives are confirmed by the survey and
+    may be used, and, when the FMU provides them but they may not, why (a note for the
+    evidence: finite differences stand in). No note when the FMU provides none."""
+    failed = next((exc for flag, _, exc in s.failures if flag == "directional"), None)
+    if failed is not None:
+        return False, (f"the FMU's directional derivatives were not used: {failed.call} "
+                       f"returned {failed.status} (directional-derivative-mismatch)")
+    if not s.directional or s.layout is None:
+        return False, ""
+    worst = mismatched_entries(s, "dd", **directional_options(ctx))
+    if not worst:
+        return True, ""
+    (i, j), _ = max(worst.items(), key=lambda kv: kv[1].ratio)
+    return False, (f"the FMU's directional derivatives were not used: finite differences "
+                   f"refute {len(worst)} of their entries, worst {s.layout.entry(i, j)} "
+                   "(directional-derivative-mismatch)")

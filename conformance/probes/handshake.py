@@ -14,7 +14,7 @@ from ..findings import Location, Violation, evidence
 from .api import FmiError, ProbeContext, ProbeSkipped
 from .common import (close, error_evidence, layout_of, manifest_location, new_instance,
                      var_location)
-from ..runtime.instance import Instance
+from ..runtime.instance import Instance, KnownNotSet
 from ..runtime.layout import Layout
 from ..runtime.library import Library
 from ..runtime.modes import INIT_CALLS, configure, reconfigure
@@ -128,6 +128,8 @@ def _ode_handshake(ctx: ProbeContext, layout: Layout, library: Library, where: L
             steps(f"fmi3GetContinuousStateDerivatives at {point.label}", inst.get_derivatives,
                   len(layout.ode_states))
     except FmiError as exc:
+        if isinstance(exc, KnownNotSet) and exc.kind == "inputs":
+            return  # an input refused in ODE mode is input-not-settable's finding
         at = f" at point {point.label}" if point is not None else ""
         yield Violation(
             f"with the enable parameter false the FMU does not run as an ordinary ODE FMU: "

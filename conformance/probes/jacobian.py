@@ -20,6 +20,7 @@ import numpy as np
 from ..numerics import colouring as col
 from ..numerics import measure, numdiff
 from .api import Evaluator, FmiError, Point, ProbeContext, ProbeSkipped
+from .common import renew
 from .jacobian_layout import JacobianLayout, build_layout
 
 log = logging.getLogger(__name__)
@@ -128,6 +129,9 @@ def run_survey(ctx: ProbeContext, settings: Settings) -> Survey:
     rng = np.random.default_rng((ctx.seed, 740))
     start_time = min((p.t for p in ctx.points), default=0.0)
     for point in ctx.points:
+        failed = getattr(ctx.dae, "failure", None) is not None  # Terminated (SM-04)
+        if failed and renew(ctx, "dae") is None:
+            break
         measured = _measure_point(ctx.dae, layout, point, result, colouring, row_colouring,
                                   rng, settings, start_time)
         if measured is not None:
@@ -210,12 +214,16 @@ def record_errors(ctx: ProbeContext, code: str, items: list[tuple[str, float, fl
 # ------------------------------------------------------------------------------ shared helpers
 
 def row_scale(layout: JacobianLayout, e: measure.Entries, *,
-               declared_only: bool = False) -> np.ndarray:
+              declared_only: bool = False) -> np.ndarray:
     """S_i = sum_j |J_ij| * nominal_j over the measured entries of each row, shape (m,)."""
-    weights = np.abs(np.nan_to_num(e.fd)) * layout.nominal[e.cols]
-    if declared_only:
-        weights = weights * e.declared
-    return np.bincount(e.rows, weights=weights, minlength=len(layout.rows))
+    return measure.row_scale(e, layout.nominal, len(layout.rows), declared_only=declared_only)
+
+
+def base_point(layout: JacobianLayout, ps: PointSurvey) -> Point:
+    """The point a survey point was measured at, every known set (time from its column)."""
+    t = next((float(v) for c, v in zip(layout.cols, ps.x) if c.role == "time"), ps.point.t)
+    values = {c.vr: float(v) for c, v in zip(layout.cols, ps.x) if c.role != "time"}
+    return Point(t, values, ps.point.label)
 
 
 def point_evidence(layout: JacobianLayout, ps: PointSurvey, limit: int = 20) -> dict:

@@ -19,8 +19,11 @@ from ..numerics import settings as st
 from ..numerics.compare import compare
 from ..numerics.settings import Settings, Trajectory
 from ..simulate.integrate import simulate_instance
+from ..simulate.jacobian_check import DerivativeCheck
 from .api import FmiError, ProbeContext, ProbeSkipped
 from .common import layout_of
+from .entry_comparison import directional_options, directional_verdict
+from .jacobian import FACT, Survey
 
 SETTINGS_RULE = "simulation-failed"
 MAX_PUBLISHED_TIMES = 100_000
@@ -123,9 +126,25 @@ def simulate_mode(ctx: ProbeContext, mode: str, settings: Settings | None = None
         ctx.new_instance(mode)
     try:
         return simulate_instance(inst, layout, settings, start=start, stop=stop,
-                                 model=ctx.model, manifest=ctx.manifest)
+                                 model=ctx.model, manifest=ctx.manifest,
+                                 derivatives=derivative_check(ctx))
     finally:
         inst.free()
+
+
+def derivative_check(ctx: ProbeContext) -> DerivativeCheck:
+    """Whether the runs may use the FMU's directional derivatives: the verdict of the
+    derivative probes' survey when it ran in this worker (for both modes: derivatives refuted
+    in DAE mode are not trusted in ODE mode either), else a check at the initial point of each
+    run; both with the options of directional-derivative-mismatch."""
+    options = directional_options(ctx)
+    survey = ctx.facts.get(FACT)
+    verdict = None
+    if isinstance(survey, Survey) and survey.layout is not None and survey.points:
+        use, note = directional_verdict(ctx, survey)
+        verdict = "" if use else note
+    return DerivativeCheck(rtol=float(options["rtol"]), margin=float(options["margin"]),
+                           ulps=float(options["ulps"]), verdict=verdict)
 
 
 def publish(ctx: ProbeContext) -> None:

@@ -35,6 +35,7 @@ from ..runtime.library import Library
 from ..runtime.modes import start_initialization, start_instance
 from ..runtime.protocol import MEMORY_EXIT, Job, violation_json
 from .api import FmiError, ProbeContext, ProbeSkipped
+from .common import renew_failed
 from .registry import PROBES
 from .sampling import near_points, points_info, start_point
 
@@ -82,6 +83,7 @@ class _Stage:
         ctx = self._context(library, layout)
         self.send({"event": "ready", "info": ctx.facts["info"], "memory": memory_info()})
         for code, name, options in self.payload.probes:
+            renew_failed(ctx)  # a probe never inherits an instance another one terminated
             self._probe(ctx, record, code, name, options)
             if library.fatal:  # every instance is invalid now (SM-04): start afresh
                 self.send({"event": "fatal", "code": code})
@@ -126,8 +128,7 @@ class _Stage:
         except ProbeSkipped as exc:
             skipped = str(exc) or "skipped by the probe"
         except FmiError as exc:
-            first = f": {exc.log[0]}" if exc.log else ""
-            skipped = f"{exc.call} returned {exc.status}{first}"
+            skipped = exc.cause()
         except MemoryError:
             violations.clear()
             self.send({"event": "memory", "code": code})

@@ -30,20 +30,45 @@ class Dependency(NamedTuple):
     dependent_element: int = 0
 
 
+class KnownNotSet(FmiError):
+    """Setting one kind of known of a point failed (in :meth:`Instance.set_point`).
+
+    ``kind`` is what was being set: "time" (fmi3SetTime), "states" (fmi3SetContinuousStates),
+    "algebraic variables", "inputs", or "algebraic variables and inputs" (one fmi3SetFloat64
+    sets both when a point has both); ``vrs`` the value references, ``names`` their names,
+    ``mode`` the instance's mode ("dae" or "ode", in Continuous-Time Mode). The call, status and
+    log are those of the FmiError of the set.
+    """
+
+    def __init__(self, error: FmiError, kind: str, vrs: Sequence[int], names: Sequence[str],
+                 mode: str):
+        super().__init__(error.call, error.status, error.log)
+        self.after = error.after
+        self.kind, self.vrs, self.names, self.mode = kind, tuple(vrs), tuple(names), mode
+
+    def describe(self) -> str:
+        what = ""
+        if self.vrs:
+            shown = ", ".join(f"{n} (valueReference {vr})"
+                              for n, vr in zip(self.names[:5], self.vrs[:5]))
+            what = f" of the {self.kind} {shown}{', ...' if len(self.vrs) > 5 else ''}"
+        first = f": {self.log[0]}" if self.log else ""
+        return (f"{self.call}{what} returned {self.status} in {self.mode.upper()} mode, "
+                f"Continuous-Time Mode{first}")
+
+
 class PointNotSet(Unavailable):
     """Setting a point's knowns failed inside evaluate/directional/adjoint.
 
     An :class:`Unavailable` (a probe's ProbeSkipped), not an :class:`FmiError`: the fault is a
-    rejected set, which ``algebraic-not-settable`` (algebraic variables) and ``evaluation-failed``
-    (time, states, inputs) report; a probe that catches FmiError around an evaluation must not
-    report it again.
-    ``error`` is the FmiError of the set.
+    rejected set, which ``algebraic-not-settable`` (algebraic variables),
+    ``input-not-settable`` (inputs) and ``evaluation-failed`` (time, states) report; a probe
+    that catches FmiError around an evaluation must not report it again.
+    ``error`` is the :class:`KnownNotSet` of the set (``kind`` says what was being set).
     """
 
     def __init__(self, point: Point, error: FmiError):
-        first = f": {error.log[0]}" if error.log else ""
-        super().__init__(f"cannot set point {point.label}: {error.call} returned "
-                         f"{error.status}{first}")
+        super().__init__(f"cannot set point {point.label}: {error.cause()}")
         self.point, self.error = point, error
 
 
@@ -74,6 +99,8 @@ class Instance:
     ``mode`` is the mode it was started in ("dae" or "ode"); ``calls`` counts its FMI calls;
     ``started`` says how DAE mode was reached ("configuration" or "runtime-switch");
     ``discrete`` is what the event update after initialisation said (nextEventTime...).
+    ``failure`` is the first call that returned fmi3Error or fmi3Fatal (SM-04: the instance is
+    in Terminated since; a later failing call carries it as ``after``), cleared by fmi3Reset.
     """
 
     def __init__(self, library: Library, *, name: str):
@@ -85,6 +112,7 @@ class Instance:
         self.mode = "ode"
         self.started = ""
         self.calls = 0
+        self.failure: FmiError | None = None
         self.initialised = False
         self.initializing = False    # in Initialization Mode, where fmi3Terminate is not allowed
         self.discrete: DiscreteStates | None = None   # the update that ended initialisation
@@ -102,7 +130,14 @@ class Instance:
     def _fmi(self, fname: str, *args: Any, instance: bool = True) -> Any:
         self.calls += 1
         function = getattr(self.library.fmu, fname)
-        return function(self.component, *args) if instance else function(*args)
+        try:
+            return function(self.component, *args) if instance else function(*args)
+        except FmiError as exc:
+            if self.failure is not None:
+                exc.after = self.failure
+            elif exc.status in ("fmi3Error", "fmi3Fatal"):
+                self.failure = exc
+            raise
 
     # -- state machine -------------------------------------------------------------------
 
@@ -149,6 +184,7 @@ class Instance:
     def reset(self) -> None:
         """fmi3Reset: back to Instantiated, start values included (MV-23, DAE-11)."""
         self._fmi("fmi3Reset")
+        self.failure = None
         self.initialised = False
         self.mode = "ode"
 
@@ -231,15 +267,37 @@ class Instance:
 
     def set_point(self, point: Point, *, algebraic: bool = True) -> None:
         """Set t, the states, the inputs and (DAE mode, unless ``algebraic`` is false) the
-        algebraic variables of ``point``."""
-        self.set_time(point.t)
+        algebraic variables of ``point``; a refused set is a :class:`KnownNotSet` saying what
+        was being set (algebraic variables and inputs share one fmi3SetFloat64)."""
+        self._known("time", (), lambda: self.set_time(point.t))
         states = self.layout.states_for(self.mode)
         if states and all(vr in point.values for vr in states):
-            self.set_states([point.values[vr] for vr in states])
+            self._known("states", states,
+                        lambda: self.set_states([point.values[vr] for vr in states]))
         dae = self.mode == "dae" and algebraic
-        knowns = [vr for vr in (*(self.layout.algebraic if dae else ()), *self.layout.inputs)
-                  if vr in point.values]
-        self.set_float64(knowns, [point.values[vr] for vr in knowns])
+        alg = [vr for vr in (self.layout.algebraic if dae else ()) if vr in point.values]
+        inputs = [vr for vr in self.layout.inputs if vr in point.values]
+        knowns = [*alg, *inputs]
+        kind = ("algebraic variables and inputs" if alg and inputs
+                else "algebraic variables" if alg else "inputs")
+        self._known(kind, knowns,
+                    lambda: self.set_float64(knowns, [point.values[vr] for vr in knowns]))
+
+    def set_algebraic(self, point: Point) -> None:
+        """Set the algebraic variables of ``point`` alone (a :class:`KnownNotSet` if refused)."""
+        alg = [vr for vr in self.layout.algebraic if vr in point.values]
+        self._known("algebraic variables", alg,
+                    lambda: self.set_float64(alg, [point.values[vr] for vr in alg]))
+
+    def _known(self, kind: str, vrs: Sequence[int], action: Any) -> None:
+        try:
+            action()
+        except FmiError as exc:
+            error = KnownNotSet(exc, kind, vrs, [self.layout.name(vr) for vr in vrs],
+                                self.mode)
+            if self.failure is exc:
+                self.failure = error
+            raise error from None
 
     def _set_or_skip(self, point: Point) -> None:
         try:

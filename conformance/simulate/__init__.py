@@ -3,6 +3,7 @@
     integrate.py  simulate_instance: one run of an instance in its mode (the public function)
     system.py     the FMU as a DAE residual or an ODE right-hand side, with coloured Jacobians,
                   event indicators and the event calls
+    jacobian_check.py  whether the run may use the FMU's directional derivatives (confirmed)
     output.py     the CSV file of a trajectory
 
 The integrators, their settings and limits, and the comparison of two runs are plain numerics

@@ -19,22 +19,25 @@ from ..numerics.settings import Settings, Trajectory
 from ..runtime.errors import FmiError
 from ..runtime.instance import Instance
 from ..runtime.layout import Layout
+from .jacobian_check import DerivativeCheck, choose_jacobian
 from .system import FmuDae, FmuOde
 
 
 def simulate_instance(inst: Instance, layout: Layout, settings: Settings, *, start: float,
-                      stop: float, model: Any, manifest: Any) -> Trajectory:
+                      stop: float, model: Any, manifest: Any,
+                      derivatives: DerivativeCheck | None = None) -> Trajectory:
     """Integrate ``inst`` in its mode (``inst.mode``) from ``start`` to ``stop``, starting from
-    the values it holds; the model and manifest give the declared sparsity of its Jacobian."""
+    the values it holds; the model and manifest give the declared sparsity of its Jacobian,
+    ``derivatives`` whether the FMU's directional derivatives may be used (jacobian_check)."""
     if inst.mode == "dae":
-        system = FmuDae(inst, layout, manifest)
+        system = choose_jacobian(FmuDae(inst, layout, manifest), start, derivatives)
         y0 = inst.get_float64([*system.states, *system.algebraic])
         traj = integrate_dae(system, settings, t0=start, y0=y0, stop=stop,
                              start_update=inst.discrete)
         if not traj.has_events:  # after events the discrete state no longer fits early times
             traj.residual_along = residual_along(inst, layout, traj)
         return traj
-    ode = FmuOde(inst, layout, model)
+    ode = choose_jacobian(FmuOde(inst, layout, model), start, derivatives)
     nominal = np.array([layout.scale(vr) for vr in ode.algebraic])
     return integrate_ode(ode, settings, t0=start, x0=inst.get_float64(ode.states), stop=stop,
                          algebraic_nominal=nominal, start_update=inst.discrete)

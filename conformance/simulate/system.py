@@ -67,6 +67,16 @@ class _Coloured:
         self.use_directional = use_directional
         self.source = DIRECTIONAL if use_directional else FINITE_DIFFERENCES
 
+    def refuse(self, note: str) -> None:
+        """Finite differences from now on: the FMU's directional derivatives were not
+        confirmed (``note`` says why; it becomes part of the source text)."""
+        self.use_directional = False
+        self.source = f"{FINITE_DIFFERENCES} ({note})"
+
+    def product(self, seed: np.ndarray) -> np.ndarray:
+        """The FMU's ``J @ seed`` at the values already set."""
+        return self.inst.directional_as_set(self.rows, self.cols, seed)
+
     def directional(self) -> np.ndarray:
         jac = np.zeros(self.pattern.shape)
         p = self.pattern

@@ -41,6 +41,9 @@
  *   DEFECT_ODE_DERIVATIVES_FAIL    ODE mode: fmi3GetContinuousStateDerivatives returns fmi3Error
  *   DEFECT_DAE_INIT_REFUSED        DAE mode: fmi3ExitInitializationMode returns fmi3Error
  *   DEFECT_W_NOT_SETTABLE          DAE mode: w cannot be set in Continuous-Time Mode
+ *   DEFECT_INPUT_NOT_SETTABLE      DAE mode: fmi3SetFloat64 on an input returns fmi3Error in
+ *                                  Continuous-Time Mode and the instance goes to Terminated
+ *   DEFECT_ZERO_DIRECTIONAL        fmi3GetDirectionalDerivative returns zeros (fmi3OK)
  *   DEFECT_EVAL_ERROR_AFTER_START  DAE mode: reading residuals fails once time has advanced
  *   DEFECT_MISSING_EXPORT          fmi3GetClock is not exported
  *   DEFECT_DAE_ONLY                always in DAE mode, as if the switch were stuck at true
@@ -985,8 +988,19 @@ fmi3Status fmi3GetDirectionalDerivative(fmi3Instance instance,
         return fmi3Fatal;
     }
 #endif
+#ifdef DEFECT_ZERO_DIRECTIONAL
+    {
+        fmi3Status status = partial_derivatives(instance, "fmi3GetDirectionalDerivative", 0,
+            unknowns, nUnknowns, knowns, nKnowns, seed, nSeed, sensitivity, nSensitivity);
+        size_t i;
+        if (status == fmi3OK)   /* a stub that never computes anything */
+            for (i = 0; i < nSensitivity; i++) sensitivity[i] = 0.0;
+        return status;
+    }
+#else
     return partial_derivatives(instance, "fmi3GetDirectionalDerivative", 0, unknowns, nUnknowns,
                                knowns, nKnowns, seed, nSeed, sensitivity, nSensitivity);
+#endif
 }
 
 fmi3Status fmi3GetAdjointDerivative(fmi3Instance instance,
@@ -1253,6 +1267,12 @@ fmi3Status fmi3SetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], 
         if (!may_set(c, kind))
             FAIL("fmi3SetFloat64: variable %u cannot be set in %s%s", (unsigned)vr[k],
                  state_name(c->d.state), kind == K_W && !c->d.dae ? " (ODE mode)" : "");
+#ifdef DEFECT_INPUT_NOT_SETTABLE
+        if (kind == K_U && c->d.dae && c->d.state == ContinuousTimeMode) {
+            c->d.state = Terminated;   /* after fmi3Error only Terminated is left (SM-04) */
+            FAIL("fmi3SetFloat64: input %u cannot be set in DAE mode", (unsigned)vr[k]);
+        }
+#endif
     }
     for (k = 0; k < nvr; k++) {
         int kind = lookup(c, vr[k], &idx);

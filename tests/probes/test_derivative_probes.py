@@ -85,13 +85,15 @@ TWINS = {"SimpleDAE": _simple, "Robertson": _robertson, "HelloWorldDAE": _hello}
 
 @dataclass
 class Fake:
-    """An Evaluator over a twin; ``dd_hook``/``adj_hook`` distort the FMU's derivatives."""
+    """An Evaluator over a twin; ``dd_hook`` distorts the partial derivatives behind both
+    derivative functions, ``directional_hook``/``adj_hook`` those of one of them."""
 
     twin: Twin
     mode: str = "dae"
     calls: int = 0
     dd_hook: Callable | None = None
     adj_hook: Callable | None = None
+    directional_hook: Callable | None = None
     refuse: Sequence[str] = ()
 
     def _state(self, point: Point, bump: tuple[int, complex] | None = None):
@@ -143,6 +145,8 @@ class Fake:
         jac = self.jacobian(point, unknowns, knowns)
         if self.dd_hook:
             jac = self.dd_hook(jac, unknowns, knowns)
+        if self.directional_hook:
+            jac = self.directional_hook(jac, unknowns, knowns)
         return jac @ np.asarray(seed)
 
     def adjoint(self, point, unknowns, knowns, seed):
@@ -255,7 +259,7 @@ def _wrong(row_vr: int, col_vr: int, factor: float):
 
 
 def test_wrong_directional_entry_is_a_directional_mismatch():
-    ctx = make_ctx("SimpleDAE", dd_hook=_wrong(2, 1, -1.0))   # d der(x1)/d x1 sign flipped
+    ctx = make_ctx("SimpleDAE", directional_hook=_wrong(2, 1, -1.0))  # d der(x1)/d x1 flipped
     result = found(ctx)
     assert set(result) == {"DAE740"}
     (v,) = result["DAE740"]
@@ -263,6 +267,62 @@ def test_wrong_directional_entry_is_a_directional_mismatch():
     ev = dict(v.evidence)
     assert ev["fmu"] == pytest.approx(-ev["finite_difference"], rel=1e-6)
     assert ev["tolerance"] > 0 and ev["error_estimate"] >= 0
+
+
+def test_wrong_partial_behind_both_functions_is_reported_for_each():
+    # the same wrong partial derivative behind fmi3GetDirectionalDerivative and
+    # fmi3GetAdjointDerivative: an importer may call either, so each is a finding
+    result = found(make_ctx("SimpleDAE", dd_hook=_wrong(2, 1, -1.0)))
+    assert set(result) == {"DAE740", "DAE741"}
+    assert [v.subject for v in result["DAE740"]] == ["d(der(x1))/d(x1)"]
+    assert [v.subject for v in result["DAE741"]] == ["d(der(x1))/d(x1)"]
+
+
+def _zeros(jac, unknowns, knowns):
+    return np.zeros_like(jac)
+
+
+@pytest.mark.parametrize("scene", sorted(TWINS))
+def test_zero_derivatives_of_both_functions_are_both_findings_and_nothing_else(scene):
+    # every scene claims both functions (providesDirectional/AdjointDerivatives)
+    assert set(found(make_ctx(scene, dd_hook=_zeros))) == {"DAE740", "DAE741"}
+
+
+@pytest.mark.parametrize("seed", range(5))
+@pytest.mark.parametrize("scene", sorted(TWINS))
+def test_zero_directional_derivatives_are_not_used_for_dgdw(scene, seed):
+    # correct equations, directional derivatives all zero, the adjoint right: the derivative
+    # finding only, not a singular dg/dw built from the zeros
+    result = found(make_ctx(scene, seed=seed, directional_hook=_zeros))
+    assert set(result) == {"DAE740"}
+
+
+def test_singular_dgdw_is_found_from_finite_differences_when_the_derivatives_are_refuted():
+    twin = _hello_with(lambda t, x, w, u: [w[0] + 2 * w[1] - x[0], 2 * w[0] + 4 * w[1] - 2 * x[0]])
+    result = found(make_ctx("HelloWorldDAE", twin=twin, directional_hook=_zeros))
+    assert set(result) == {"DAE740", "DAE746"}
+    ev = dict(result["DAE746"][0].evidence)
+    assert ev["source"] == "finite differences"
+    assert "not used" in ev["note"] and ev["measurement_error"] >= 0
+    assert set(ev["involved"]) == {"y", "z"}
+
+
+def test_dgdw_uses_confirmed_directional_derivatives_without_a_note():
+    twin = _hello_with(lambda t, x, w, u: [w[0] + 2 * w[1] - x[0], 2 * w[0] + 4 * w[1] - 2 * x[0]])
+    (v,) = found(make_ctx("HelloWorldDAE", twin=twin))["DAE746"]
+    ev = dict(v.evidence)
+    assert ev["source"] == "fmi3GetDirectionalDerivative"
+    assert "note" not in ev and "measurement_error" not in ev
+
+
+def test_directional_verdict_uses_the_options_of_directional_derivative_mismatch():
+    from conformance.probes.entry_comparison import OPTIONS_FACT, directional_verdict
+
+    ctx = make_ctx("SimpleDAE", directional_hook=_wrong(2, 1, 1.0 + 1e-4))
+    s = D.survey(ctx)
+    assert directional_verdict(ctx, s)[0] is False      # the catalogue's rtol 1e-5
+    ctx.facts[OPTIONS_FACT] = {**ctx.facts[OPTIONS_FACT], "rtol": 1e-2}
+    assert directional_verdict(ctx, s) == (True, "")    # as DAE740 ran: confirmed
 
 
 def test_wrong_adjoint_only_is_an_adjoint_mismatch():
@@ -288,7 +348,7 @@ def test_directional_nonzero_at_an_undeclared_entry_is_a_directional_mismatch():
         if 11 in unknowns and 6 in knowns:
             jac[list(unknowns).index(11), list(knowns).index(6)] = 0.7
         return jac
-    result = found(make_ctx("SimpleDAE", dd_hook=hook))
+    result = found(make_ctx("SimpleDAE", directional_hook=hook))
     assert set(result) == {"DAE740"}
     assert result["DAE740"][0].subject == "d(__residual0)/d(z2)"
 
@@ -302,6 +362,42 @@ def test_missing_dependency_is_undeclared():
     result = found(ctx)
     assert set(result) == {"DAE742"}
     assert [v.subject for v in result["DAE742"]] == ["d(__residual1)/d(z2)"]
+
+
+def test_undeclared_inputs_of_the_residuals_do_not_leak_into_the_outputs_adjoint():
+    # residual0 and residual1 without u1, u2: the row colouring seeds them with the outputs
+    # (no declared column in common), and their real u-entries add to the outputs' u-entries;
+    # the single-entry adjoint call clears the outputs
+    ctx = make_ctx("SimpleDAE", manifest_edits=[
+        ('<Residual valueReference="11" dependencies="1 5 7 8" dependenciesKind="dependent '
+         'dependent dependent dependent"/>',
+         '<Residual valueReference="11" dependencies="1 5" dependenciesKind="dependent '
+         'dependent"/>'),
+        ('<Residual valueReference="12" dependencies="3 5 6 7" dependenciesKind="dependent '
+         'dependent dependent dependent"/>',
+         '<Residual valueReference="12" dependencies="3 5 6" dependenciesKind="dependent '
+         'dependent dependent"/>')])
+    result = found(ctx)
+    assert set(result) == {"DAE742"}
+    assert {v.subject for v in result["DAE742"]} >= {"d(__residual0)/d(u2)",
+                                                      "d(__residual1)/d(u1)"}
+
+
+def test_adjoint_mismatch_confirmed_by_the_single_entry_call_is_kept():
+    calls = []
+    ctx = make_ctx("SimpleDAE", adj_hook=_wrong(12, 6, 2.0))
+    adjoint = ctx.dae.adjoint
+
+    def spy(point, unknowns, knowns, seed):
+        calls.append((list(unknowns), list(knowns)))
+        return adjoint(point, unknowns, knowns, seed)
+
+    ctx.dae.adjoint = spy
+    (v,) = list(D.adjoint_derivative_mismatch(ctx, **OPTIONS["DAE741"]))
+    assert ([12], [6]) in calls            # the row seeded, the column read, nothing else
+    ev = dict(v.evidence)
+    assert ev["confirmed"].startswith("single-entry")
+    assert ev["fmu"] == pytest.approx(2 * ev["finite_difference"], rel=1e-6)
 
 
 def test_missing_dependency_hidden_behind_a_declared_column_is_found():

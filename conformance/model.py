@@ -13,6 +13,7 @@ from typing import Iterator, Mapping, NamedTuple
 
 from lxml import etree
 
+from .definitions import NO_DEFINITIONS, Definitions, read_definitions
 from .unknowns import Unknown, parse_uint, parse_unknown
 
 MODEL_DESCRIPTION = "modelDescription.xml"
@@ -60,6 +61,10 @@ class Variable(NamedTuple):
     previous: int | None = None
     raw_vr: str | None = None     # the attribute text, when it did not parse as an integer
     aliases: tuple[str, ...] = ()  # names of <Alias> children
+    declared_type: str | None = None
+    unit: str | None = None
+    display_unit: str | None = None
+    alias_display_units: tuple[tuple[str, str], ...] = ()  # (alias name, displayUnit) where given
 
     @property
     def is_float(self) -> bool:
@@ -115,6 +120,7 @@ class ModelDescription:
     line: int | None = None
     has_co_simulation: bool = False
     default_experiment: DefaultExperiment | None = None
+    definitions: Definitions = NO_DEFINITIONS
     by_vr: Mapping[int, Variable] = field(default_factory=dict, init=False, repr=False,
                                           compare=False, hash=False)
 
@@ -194,8 +200,9 @@ def _variable(el: etree._Element) -> Variable | None:
     start = get("start")
     dims: list[Dimension] = []
     aliases: list[str] = []
+    alias_units: list[tuple[str, str]] = []
     if len(el):
-        start = _children_of_variable(el, start, dims, aliases)
+        start = _children_of_variable(el, start, dims, aliases, alias_units)
     raw_vr = get("valueReference")
     vr = int(raw_vr) if raw_vr is not None and raw_vr.isascii() and raw_vr.isdigit() else None
     derivative = get("derivative")
@@ -207,12 +214,13 @@ def _variable(el: etree._Element) -> Variable | None:
         el.sourceline, tuple(dims), get("nominal"), get("min"), get("max"),
         get("description"), get("reinit", "false") in ("true", "1"), get("clocks"),
         parse_uint(previous) if previous is not None else None,
-        raw_vr if vr is None else None, tuple(aliases),
+        raw_vr if vr is None else None, tuple(aliases), get("declaredType"), get("unit"),
+        get("displayUnit"), tuple(alias_units),
     )
 
 
 def _children_of_variable(el: etree._Element, start: str | None, dims: list[Dimension],
-                          aliases: list[str]) -> str | None:
+                          aliases: list[str], alias_units: list[tuple[str, str]]) -> str | None:
     """Read <Start>, <Alias> and <Dimension> children; returns the start value."""
     starts = []
     for child in el:
@@ -223,6 +231,8 @@ def _children_of_variable(el: etree._Element, start: str | None, dims: list[Dime
             starts.append(child.get("value", ""))
         elif tag == "Alias":
             aliases.append(child.get("name", ""))
+            if (shown := child.get("displayUnit")) is not None:
+                alias_units.append((aliases[-1], shown))
         elif tag == "Dimension":
             dims.append(Dimension(child.get("start"), parse_uint(child.get("valueReference")),
                                   child.sourceline))
@@ -273,6 +283,7 @@ def read_model_description(tree: etree._ElementTree, *, file: str = MODEL_DESCRI
         model_exchange=me, variables=tuple(variables), structure=tuple(structure),
         line=root.sourceline, has_co_simulation=_first(root, "CoSimulation") is not None,
         default_experiment=_default_experiment(_first(root, "DefaultExperiment")),
+        definitions=read_definitions(root),
     )
 
 

@@ -3,11 +3,9 @@ conformance/checks/model_types.py, model_names.py and model_references.py.
 
 The fixtures (tests/fixtures/DAE53x) show each rule failing and passing on a scene; these tests
 pin the first-cause decisions (which rule stays quiet when another explains the fault), the
-evidence a finding carries, and the cost on a large model.
+evidence a finding carries, and the fast paths on a large model.
 """
 from __future__ import annotations
-
-import time
 
 import pytest
 from lxml import etree
@@ -196,12 +194,17 @@ def test_clock_references():
 # -- cost -----------------------------------------------------------------------------------
 
 @pytest.mark.parametrize("naming", ["structured", "flat"])
-def test_large_model_is_clean_and_fast(naming):
+def test_large_model_is_clean(naming):
+    # (speed is what make bench measures; this keeps the fast paths honest about their result)
     defined = UNITS + '<TypeDefinitions><Float64Type name="L" unit="m"/></TypeDefinitions>'
     variables = "".join(
         f'<Float64 name="block{i}.x[{i % 3}]" valueReference="{i + 2}" declaredType="L" '
         f'displayUnit="mm"><Alias name="der(block{i}.y)"/></Float64>' for i in range(20_000))
     ctx = ctx_of(variables, definitions=defined, naming=naming)
-    start = time.perf_counter()
     assert found(ctx) == {}
-    assert time.perf_counter() - start < 1.0
+    # ... and they still find the one fault among the 20,000
+    bad = variables.replace('name="block7.x[1]"', 'name="block7.x[1"')
+    bad = bad.replace('displayUnit="mm"><Alias name="der(block9.y)"',
+                      'displayUnit="km"><Alias name="der(block9.y)"')
+    result = found(ctx_of(bad, definitions=defined, naming=naming))
+    assert set(result) == ({"DAE532", "DAE534"} if naming == "structured" else {"DAE532"})

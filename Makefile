@@ -6,7 +6,7 @@ STAMP  := $(VENV)/.installed-stamp
 DEMO   := build/demo
 SCENES := SimpleDAE Robertson HelloWorldDAE
 
-.PHONY: venv demo test bench clean
+.PHONY: venv demo test fuzz bench clean
 
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -36,6 +36,10 @@ demo: $(STAMP)
 # The whole suite. pytest exits non-zero (5) when no test is collected; that fails too.
 test: $(STAMP)
 	$(BIN)/python -m pytest -q -p no:cacheprovider
+
+# The mutation test of the engine with 20 times its examples and a random seed (minutes).
+fuzz: $(STAMP)
+	$(BIN)/python -m pytest -q -p no:cacheprovider tests/checks/test_engine_properties.py --fuzz 20
 
 bench: $(STAMP)
 	$(BIN)/python -m bench.static_bench --out reports/bench

@@ -20,7 +20,7 @@ else:  # pragma: no cover - exercised on 3.10 only
     import tomli as tomllib
 
 STAGES = ("archive", "xml", "schema", "static", "probe", "simulation")
-NEEDS = ("model-description", "manifest", "binary")
+NEEDS = ("model-description", "manifest", "dae-layer", "binary")
 REQUIRED = ("code", "name", "severity", "stage", "drafts", "spec", "summary", "rationale",
             "bad", "good")
 

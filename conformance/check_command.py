@@ -66,6 +66,7 @@ def _options(args: argparse.Namespace, config: dict | None = None) -> EngineOpti
         draft=args.draft or config.get("draft", "auto"),
         probes=not args.no_probes and bool(config.get("probes", True)),
         probes_only=args.probes_only, seed=args.seed,
+        endurance=args.endurance or config.get("endurance", "quick"),
     )
 
 

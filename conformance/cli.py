@@ -15,7 +15,7 @@ from typing import Sequence
 from . import __version__
 from .catalogue import CatalogueError
 from .check_command import cmd_check, cmd_precommit
-from .config import FAIL_ON
+from .config import ENDURANCE_LEVELS, FAIL_ON
 from .drafts.detect import ALL_DRAFTS
 from .exit_codes import EXIT_INTERRUPTED, EXIT_USAGE, UsageError
 from .reporters import REPORTER_BY_NAME
@@ -96,6 +96,10 @@ def _check_arguments(check: argparse.ArgumentParser) -> None:
                         help="static checks only: do not load the FMU's binary")
     probes.add_argument("--probes-only", action="store_true",
                         help="skip the schema and static rules; run the dynamic probes")
+    check.add_argument("--endurance", choices=ENDURANCE_LEVELS, default=None,
+                       help="endurance probes: thousands of calls on one instance, memory "
+                            "growth, instance independence (default: quick; long: a longer "
+                            "budget; off: skip them)")
     check.add_argument("--seed", type=int, default=0,
                        help="seed for the probes' sampled points (recorded in the report)")
     check.add_argument("--config", type=Path, metavar="PYPROJECT",

@@ -7,6 +7,7 @@ ignore = ["ls-description-mismatch"]
 severity = { DAE302 = "warning" }
 draft = "auto"
 probes = true
+endurance = "quick"      # off | quick | long: the budget of the endurance probes
 fail-on = "error"        # error | warning | never: the least severity that fails the run
 exit-zero = false        # exit 0 even with failing findings (usage errors still exit 2)
 baseline = "lsdae-baseline.json"   # relative to this pyproject.toml
@@ -26,8 +27,9 @@ else:  # pragma: no cover
     import tomli as tomllib
 
 KEYS = {"select", "ignore", "severity", "draft", "probes", "fail-on", "exit-zero", "baseline",
-        "jobs", "rule-options"}
+        "jobs", "rule-options", "endurance"}
 FAIL_ON = ("error", "warning", "never")
+ENDURANCE_LEVELS = ("off", "quick", "long")
 
 
 class ConfigError(Exception):
@@ -88,6 +90,9 @@ def _check_run_keys(values: dict[str, Any], path: Path) -> None:
     """Validate the keys that decide the exit code and the run; resolve the baseline path."""
     if "fail-on" in values and values["fail-on"] not in FAIL_ON:
         raise ConfigError(f"{path}: [tool.lsdae] fail-on must be one of {', '.join(FAIL_ON)}")
+    if "endurance" in values and values["endurance"] not in ENDURANCE_LEVELS:
+        raise ConfigError(f"{path}: [tool.lsdae] endurance must be one of "
+                          f"{', '.join(ENDURANCE_LEVELS)}")
     if "exit-zero" in values and not isinstance(values["exit-zero"], bool):
         raise ConfigError(f"{path}: [tool.lsdae] exit-zero must be true or false")
     jobs = values.get("jobs", 1)

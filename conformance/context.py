@@ -5,6 +5,7 @@ from dataclasses import dataclass, field
 from typing import Any, Callable, Iterable, TypeVar
 
 from .findings import Violation
+from .layer import layer_declaration
 from .manifest import Manifest
 from .model import ModelDescription
 
@@ -21,6 +22,12 @@ class CheckContext:
     draft: str | None
     names: tuple[str, ...] = ()     # member names of the FMU (forward slashes)
     _memo: dict[str, Any] = field(default_factory=dict, repr=False, compare=False, hash=False)
+
+    @property
+    def dae_layer(self) -> bool:
+        """Whether the FMU declares the fmi-ls-dae layer (:mod:`conformance.layer`)."""
+        return self.manifest is not None or self.memo(
+            "layer-declaration", lambda: layer_declaration(self.model, self.names)) is not None
 
     def memo(self, key: str, compute: Callable[[], T]) -> T:
         """Compute a derived fact once per FMU and share it between checks (e.g. the set of

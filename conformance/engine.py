@@ -26,6 +26,7 @@ from .drafts.migrate import legacy_violations
 from .engine_options import EngineOptions, RuleSelection
 from .findings import FmuReport, Location, Report, Violation, evidence
 from .fmu import ArchiveLimits, ArchiveReadError, open_fmu
+from .layer import manifest_missing, skip_reason
 from .manifest import MANIFEST, Manifest, read_manifest
 from .model import MODEL_DESCRIPTION, ModelDescription, read_model_description
 from .schemas import (
@@ -57,9 +58,13 @@ def check_fmu(path: Path, *, options: EngineOptions = EngineOptions(),
         collector.emit("internal-error", Violation(
             f"lsdae failed while checking this FMU: {type(exc).__name__}: {exc}",
             evidence=evidence(exception=type(exc).__name__)))
+        if state.draft is None and state.has_manifest:  # never summarised as "no manifest"
+            state.info.setdefault("manifest", "present, not checked: lsdae failed (see the "
+                                              "internal-error finding)")
     return FmuReport(
         path=display_path or str(path), draft=state.draft, findings=collector.findings(),
         rules_run=tuple(sorted(state.run)), rules_skipped=tuple(sorted(state.skipped)),
+        rules_not_run=tuple(sorted(state.not_run)),
         info=evidence(state.info),
     )
 
@@ -87,12 +92,22 @@ class _State:
         self.draft: str | None = None
         self.run: set[str] = set()
         self.skipped: set[tuple[str, str]] = set()
+        self.not_run: set[tuple[str, str]] = set()   # skipped although they should have run
         self.info: dict[str, object] = {}
         self.unread: dict[str, str] = {}  # need -> why the file it stands for was not read
+        self.has_manifest = False
+        self.not_checked: str | None = None   # why nothing past the archive was checked
 
-    def missing(self, need: str) -> str:
-        """Why a rule that needs ``need`` cannot run."""
-        return self.unread.get(need, f"no {need}")
+    def skip_for(self, code: str, needs, have, reason: str) -> str:
+        """Skip a rule whose ``needs`` are not all there, and return the reason: the layer's
+        ``reason`` -- or, when the file a need stands for is there but was not read, that (a
+        failure, listed as not run)."""
+        missing = [n for n in needs if not have.get(n, False) and n in self.unread]
+        if missing:
+            reason = self.unread[missing[0]]
+            self.not_run.add((code, reason))
+        self.skipped.add((code, reason))
+        return reason
 
 
 def _run(path: Path, options: EngineOptions, catalogue: Catalogue, selection: RuleSelection,
@@ -105,8 +120,14 @@ def _run(path: Path, options: EngineOptions, catalogue: Catalogue, selection: Ru
         return
     with source:
         names = tuple(source.names())
+        state.has_manifest = MANIFEST in names
         model = _read_model(source, names, options, collector, texts, state)
-        manifest = _read_manifest(source, names, options, collector, texts, state)
+        if state.not_checked:
+            state.info["not_checked"] = state.not_checked
+            state.skipped.update((r.code, state.not_checked) for r in catalogue
+                                 if r.code in selection.enabled and r.stage not in ("archive",))
+            return
+        manifest = _read_manifest(source, names, options, collector, texts, state, model)
         if BUILD_DESCRIPTION_FILE in names and not options.probes_only:  # a source FMU
             build = _read_xml(source, BUILD_DESCRIPTION_FILE, collector, texts)
             collector.add_stage(validate_build_description(build) if build is not None else ())
@@ -123,15 +144,15 @@ def _run_probe_stage(source, ctx: CheckContext, options: EngineOptions, catalogu
                      selection: RuleSelection, collector: Collector, state: _State) -> None:
     """Dynamic probes: load the binary in a worker process (conformance.probes)."""
     have = {"model-description": ctx.model is not None, "manifest": ctx.manifest is not None,
+            "dae-layer": ctx.dae_layer,
             "binary": True}  # whether there is a binary for this platform, the runner decides
     rules = []
     for rule in catalogue:
         if rule.stage != "probe" or rule.code not in selection.enabled:
             continue
-        missing = [n for n in rule.needs if not have.get(n, False)]
-        if missing:
-            state.skipped.add((rule.code, state.missing(missing[0])))
-            state.info.setdefault("probes", f"not run: {state.missing(missing[0])}")
+        if reason := skip_reason(rule.needs, have):
+            reason = state.skip_for(rule.code, rule.needs, have, reason)
+            state.info.setdefault("probes", f"not run: {reason}")
         else:
             rules.append(rule)
     if not rules:
@@ -143,11 +164,12 @@ def _run_probe_stage(source, ctx: CheckContext, options: EngineOptions, catalogu
         return
     from .probes.runner import run_probes  # numpy and the worker machinery only when probing
 
-    outcome = run_probes(source, ctx, rules, seed=options.seed)
+    outcome = run_probes(source, ctx, rules, seed=options.seed, endurance=options.endurance)
     for code, violation in outcome.violations:
         collector.add(catalogue[code], [violation])
     state.run.update(outcome.run)
     state.skipped.update(outcome.skipped)
+    state.not_run.update(outcome.not_run)
     state.info.update(outcome.info)
 
 
@@ -163,12 +185,13 @@ def _read(source, name: str, collector: Collector) -> bytes | None:
 
 
 def _read_xml(source, name: str, collector: Collector, texts: dict[str, bytes]):
-    """Read and safely parse one XML member; keep its bytes for source excerpts."""
+    """Read and safely parse one XML member; keep its bytes for source excerpts. The manifest
+    is read as importers read it when its only fault is an undeclared fmi-ls prefix."""
     data = _read(source, name, collector)
     if data is None:
         return None
     texts[name] = data
-    tree, violations = parse_xml(data, file=name)
+    tree, violations = parse_xml(data, file=name, bind_prefixes=name == MANIFEST)
     collector.add_stage(violations)
     return tree
 
@@ -197,19 +220,27 @@ def _read_model(source, names: Sequence[str], options: EngineOptions, collector:
     if tree is None:
         state.unread["model-description"] = f"{MODEL_DESCRIPTION} cannot be read or parsed"
         return None
+    version = (tree.getroot().get("fmiVersion") or "").strip()
+    if version[:2] in ("1.", "2."):  # out of scope: said once, nothing else is checked
+        collector.emit("fmi-version-unsupported", Violation(
+            f"an FMI {version} FMU: fmi-ls-dae is a layered standard of FMI 3.0, so this FMU "
+            "is not checked", Location(file=MODEL_DESCRIPTION, line=tree.getroot().sourceline,
+                                       path="/fmiModelDescription"),
+            evidence(fmi_version=version)))
+        state.not_checked = f"FMI {version} FMU: fmi-ls-dae needs FMI 3.0"
+        return None
     if not options.probes_only:
         collector.add_stage(validate_model_description(tree))
     return read_model_description(tree, file=MODEL_DESCRIPTION)
 
 
 def _read_manifest(source, names: Sequence[str], options: EngineOptions, collector: Collector,
-                   texts: dict[str, bytes], state: _State) -> Manifest | None:
+                   texts: dict[str, bytes], state: _State,
+                   model: ModelDescription | None) -> Manifest | None:
     if MANIFEST not in names:
         if _not_read(source, MANIFEST, "manifest", "manifest", state):
             return None
-        collector.emit("manifest-missing", Violation(
-            f"no {MANIFEST}: this is an ordinary Model Exchange FMU, the DAE rules are skipped",
-            Location(file=MANIFEST)))
+        collector.emit("manifest-missing", manifest_missing(model, names))
         return None
     tree = _read_xml(source, MANIFEST, collector, texts)
     if tree is None:
@@ -229,13 +260,13 @@ def _read_manifest(source, names: Sequence[str], options: EngineOptions, collect
 
 def _run_static(ctx: CheckContext, catalogue: Catalogue, selection: RuleSelection,
                 collector: Collector, state: _State) -> None:
-    have = {"model-description": ctx.model is not None, "manifest": ctx.manifest is not None}
+    have = {"model-description": ctx.model is not None, "manifest": ctx.manifest is not None,
+            "dae-layer": ctx.dae_layer}
     for rule in catalogue:
         if rule.stage not in STATIC_STAGES or rule.code not in selection.enabled:
             continue
-        missing = [n for n in rule.needs if not have.get(n, False)]
-        if missing:
-            state.skipped.add((rule.code, state.missing(missing[0])))
+        if reason := skip_reason(rule.needs, have):
+            state.skip_for(rule.code, rule.needs, have, reason)
             continue
         if ctx.manifest is not None and not rule.applies_to(ctx.draft):
             state.skipped.add((rule.code, f"does not apply to draft {ctx.draft}"))

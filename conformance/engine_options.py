@@ -23,6 +23,7 @@ class EngineOptions:
     probes_only: bool = False
     seed: int = 0
     group_threshold: int = 3
+    endurance: str = "quick"          # the endurance probes: "off", "quick" or "long"
 
 
 class RuleSelection:

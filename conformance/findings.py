@@ -121,6 +121,9 @@ class FmuReport:
     rules_run: tuple[str, ...] = ()
     rules_skipped: tuple[tuple[str, str], ...] = ()  # (code, reason)
     info: Evidence = ()
+    # the part of rules_skipped that should have run but could not (an earlier failure, a
+    # missing capability, a budget); the rest does not apply (draft, no DAE layer, --no-probes)
+    rules_not_run: tuple[tuple[str, str], ...] = ()
 
     def count(self, severity: Severity) -> int:
         return sum(1 for f in self.findings if f.severity == severity)
@@ -128,6 +131,12 @@ class FmuReport:
     @property
     def worst(self) -> Severity | None:
         return max((f.severity for f in self.findings), default=None)
+
+    @property
+    def not_checked(self) -> str | None:
+        """Why the FMU as a whole was not checked (an FMI 2.0 FMU), or None."""
+        text = dict(self.info).get("not_checked")
+        return text if isinstance(text, str) else None
 
     @property
     def binary_not_checked(self) -> str | None:

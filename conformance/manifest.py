@@ -15,7 +15,7 @@ from typing import NamedTuple
 from lxml import etree
 
 from .drafts.detect import LS_NAMESPACE
-from .unknowns import Unknown, parse_uint, parse_unknown
+from .unknowns import Unknown, parse_unknown, parse_vr
 
 MANIFEST = "extra/org.fmi-standard.fmi-ls-dae/fmi-ls-manifest.xml"
 LS_ATTRIBUTES = ("fmi-ls-name", "fmi-ls-version", "fmi-ls-description")
@@ -84,7 +84,7 @@ def _elements(el: etree._Element | None) -> list[etree._Element]:
 
 def _ref(el: etree._Element, path: str) -> VrRef:
     raw = el.get("valueReference")
-    vr = parse_uint(raw)
+    vr = parse_vr(raw)
     extra = tuple(sorted((etree.QName(k).localname, v) for k, v in el.attrib.items()
                          if k != "valueReference"))
     return VrRef(vr=vr, line=el.sourceline, path=path, element=_local(el),
@@ -116,7 +116,7 @@ def read_manifest(tree: etree._ElementTree, *, draft: str, file: str = MANIFEST)
             structure.extend(_structure(child, rname, file))
     by_name = root.get("enableDAEModeVariable")
     if by_name is not None:
-        enables.append(VrRef(vr=parse_uint(by_name), line=root.sourceline,
+        enables.append(VrRef(vr=parse_vr(by_name), line=root.sourceline,
                              path=f"/{rname}/@enableDAEModeVariable",
                              element="@enableDAEModeVariable",
                              name=None if by_name.strip().isdigit() else by_name))

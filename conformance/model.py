@@ -14,7 +14,7 @@ from typing import Iterator, Mapping, NamedTuple
 from lxml import etree
 
 from .definitions import NO_DEFINITIONS, Definitions, read_definitions
-from .unknowns import Unknown, parse_uint, parse_unknown
+from .unknowns import Unknown, parse_unknown, parse_vr
 
 MODEL_DESCRIPTION = "modelDescription.xml"
 
@@ -119,6 +119,7 @@ class ModelDescription:
     structure: tuple[Unknown, ...]
     line: int | None = None
     has_co_simulation: bool = False
+    has_scheduled_execution: bool = False
     default_experiment: DefaultExperiment | None = None
     definitions: Definitions = NO_DEFINITIONS
     by_vr: Mapping[int, Variable] = field(default_factory=dict, init=False, repr=False,
@@ -204,16 +205,16 @@ def _variable(el: etree._Element) -> Variable | None:
     if len(el):
         start = _children_of_variable(el, start, dims, aliases, alias_units)
     raw_vr = get("valueReference")
-    vr = int(raw_vr) if raw_vr is not None and raw_vr.isascii() and raw_vr.isdigit() else None
+    vr = parse_vr(raw_vr)
     derivative = get("derivative")
     previous = get("previous")
     return Variable(
         get("name", ""), vr, type_, causality, variability, declared_init or initial,
         declared_var, declared_init, start,
-        parse_uint(derivative) if derivative is not None else None,
+        parse_vr(derivative) if derivative is not None else None,
         el.sourceline, tuple(dims), get("nominal"), get("min"), get("max"),
         get("description"), get("reinit", "false") in ("true", "1"), get("clocks"),
-        parse_uint(previous) if previous is not None else None,
+        parse_vr(previous) if previous is not None else None,
         raw_vr if vr is None else None, tuple(aliases), get("declaredType"), get("unit"),
         get("displayUnit"), tuple(alias_units),
     )
@@ -234,7 +235,7 @@ def _children_of_variable(el: etree._Element, start: str | None, dims: list[Dime
             if (shown := child.get("displayUnit")) is not None:
                 alias_units.append((aliases[-1], shown))
         elif tag == "Dimension":
-            dims.append(Dimension(child.get("start"), parse_uint(child.get("valueReference")),
+            dims.append(Dimension(child.get("start"), parse_vr(child.get("valueReference")),
                                   child.sourceline))
     return start if start is not None or not starts else " ".join(starts)
 
@@ -282,6 +283,7 @@ def read_model_description(tree: etree._ElementTree, *, file: str = MODEL_DESCRI
         naming_convention=root.get("variableNamingConvention", "flat"),
         model_exchange=me, variables=tuple(variables), structure=tuple(structure),
         line=root.sourceline, has_co_simulation=_first(root, "CoSimulation") is not None,
+        has_scheduled_execution=_first(root, "ScheduledExecution") is not None,
         default_experiment=_default_experiment(_first(root, "DefaultExperiment")),
         definitions=read_definitions(root),
     )

@@ -33,6 +33,7 @@ from .engine import EngineOptions, check_fmu
 from .findings import Report, Severity, thaw
 from .fmu import MODEL_DESCRIPTION, ArchiveReadError, open_fmu
 from .reporters import REPORTER_BY_NAME
+from .model import read_model_description
 from .xmlsafe import parse_xml
 
 RULES_BY_MODE = {"dae": ("DAE801", "DAE802", "DAE803", "DAE804"),
@@ -84,6 +85,45 @@ def default_experiment(path: Path | str) -> dict[str, float]:
     return out
 
 
+SETTABLE_START = ("input", "parameter")
+
+
+def start_values(path: Path | str, items: list[str]) -> tuple[tuple[str, float], ...]:
+    """``NAME=VALUE`` items as (name, value), checked against modelDescription.xml: the name is
+    a scalar Float64 input or parameter (as fmpy's start_values); ValueError says what is wrong."""
+    if not items:
+        return ()
+    source, _ = open_fmu(Path(path))
+    variables = {}
+    if source is not None:
+        with source:
+            try:
+                data = source.read(MODEL_DESCRIPTION)
+            except (KeyError, ArchiveReadError, OSError):
+                data = None
+        tree, _ = parse_xml(data, file=MODEL_DESCRIPTION) if data else (None, [])
+        if tree is not None:
+            variables = {v.name: v for v in read_model_description(tree).variables}
+    out = []
+    for item in items:
+        name, sep, text = item.partition("=")
+        name = name.strip()
+        if not sep:
+            raise ValueError(f"--start-value takes NAME=VALUE, not {item!r}")
+        try:
+            value = float(text)
+        except ValueError:
+            raise ValueError(f"--start-value {name}: not a number: {text!r}") from None
+        var = variables.get(name)
+        if var is None:
+            raise ValueError(f"--start-value: the FMU has no variable {name!r}")
+        if var.causality not in SETTABLE_START or var.type != "Float64" or var.dimensions:
+            raise ValueError(f"--start-value {name}: only scalar Float64 inputs and parameters "
+                             f"can be given (it is a {var.type} {var.causality})")
+        out.append((name, value))
+    return tuple(out)
+
+
 def default_stop_time(path: Path | str) -> float | None:
     """The DefaultExperiment's stopTime; None when absent or unreadable."""
     return default_experiment(path).get("stopTime")
@@ -99,7 +139,8 @@ def simulation_catalogue(settings: Any, *, time_limit: float | None = None) -> C
         if rule.name == "simulation-failed":
             rule = dataclasses.replace(rule, options=tuple(sorted(
                 {**rule.option_values, **settings.as_options(),
-                 "output_times": tuple(settings.output_times)}.items())))
+                 "output_times": tuple(settings.output_times),
+                 "start_values": tuple(tuple(p) for p in settings.start_values)}.items())))
         elif rule.name == "binary-timed-out":
             # the confirmation runs of ode-dae-trajectory-mismatch take up to one budget more
             rule = dataclasses.replace(rule, options=tuple(sorted({
@@ -189,6 +230,9 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
                    help="write the trajectory (DAE mode, or ODE mode with --mode ode) here")
     p.add_argument("--ode-output", metavar="CSV",
                    help="with --mode both: write the ODE-mode trajectory here")
+    p.add_argument("--start-value", action="append", metavar="NAME=VALUE", default=[],
+                   help="start value of a Float64 input or parameter (repeatable), set before "
+                        "the initialisation; an input keeps it during the run")
     p.add_argument("--max-steps", type=_positive(int), default=100_000, metavar="N",
                    help="step budget per mode (default 100000)")
     p.add_argument("--time-limit", type=_positive(float), default=60.0, metavar="S",
@@ -230,6 +274,11 @@ def run(args: argparse.Namespace) -> int:
     if args.rtol is not None and args.rtol >= 1:
         print("lsdae: --rtol must be below 1", file=sys.stderr)
         return EXIT_USAGE
+    try:
+        given = start_values(path, args.start_value)
+    except ValueError as exc:
+        print(f"lsdae: {exc}", file=sys.stderr)
+        return EXIT_USAGE
     experiment = default_experiment(path)
     options = dict(default_catalogue()["simulation-failed"].option_values)  # the defaults
     tolerance = experiment.get("tolerance")
@@ -239,7 +288,8 @@ def run(args: argparse.Namespace) -> int:
         **options, "mode": args.mode, "rtol": rtol,
         "stop_time": args.stop_time or experiment.get("stopTime") or 0.0,
         "output_points": args.output_points, "output_times": tuple(args.output_times or ()),
-        "max_steps": args.max_steps, "wall_seconds": args.time_limit, "record_wall_time": True})
+        "max_steps": args.max_steps, "wall_seconds": args.time_limit, "record_wall_time": True,
+        "start_values": given})
     result = simulate_fmu(path, settings)
     for traj in result.trajectories:
         sys.stdout.write(summary(traj))
@@ -289,6 +339,10 @@ def summary(traj: Any) -> str:
     after = (init.get("residual_after") or {}).get("max_abs")
     residual = (f"; initial residual {before:.3g} -> {after:.3g}"
                 if before is not None and after is not None else "")
+    along = traj.residual_along or {}
+    if along.get("max_abs") is not None:
+        residual += (f"; largest residual along the run {along['max_abs']:.3g} "
+                     f"({along['residual']} at t = {along['t']:.6g})")
     return (f"{traj.mode.upper()} mode: t = {traj.t_start:g} .. {traj.t_end:.10g} of "
             f"{traj.stop_time:g}, {state}\n"
             f"  rtol {traj.rtol:g}, {traj.steps} steps, {traj.function_calls} "

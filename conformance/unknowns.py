@@ -27,12 +27,27 @@ class Unknown(NamedTuple):
     formulations: int = 0                     # legacy: number of <Formulation> children
 
 
-def parse_uint(text: str | None) -> int | None:
-    """An unsigned integer attribute, or None (str.isdigit alone admits '²', which int refuses)."""
+UINT32_MAX = 0xFFFF_FFFF               # fmi3ValueReference
+UINT64_MAX = 0xFFFF_FFFF_FFFF_FFFF     # fmi3UInt64 (sizes, counts)
+_DIGITS = len(str(UINT64_MAX))         # longer digit strings are never read as numbers
+
+
+def parse_uint(text: str | None, *, limit: int = UINT64_MAX) -> int | None:
+    """An unsigned integer attribute up to ``limit``, or None: not a number, or out of range
+    (str.isdigit alone admits '²', which int refuses; a number of thousands of digits is out of
+    range, never an exception)."""
     if text is None:
         return None
     text = text.strip()
-    return int(text) if text.isascii() and text.isdigit() else None
+    if not (text.isascii() and text.isdigit()) or len(text) > _DIGITS:
+        return None
+    value = int(text)
+    return value if value <= limit else None
+
+
+def parse_vr(text: str | None) -> int | None:
+    """A valueReference: an unsigned integer that fits fmi3ValueReference (UInt32), or None."""
+    return parse_uint(text, limit=UINT32_MAX)
 
 
 def parse_unknown(el: etree._Element, kind: str, file: str, path: str,
@@ -45,21 +60,21 @@ def parse_unknown(el: etree._Element, kind: str, file: str, path: str,
     if deps_text is not None:
         tokens = deps_text.split()
         joined = "".join(tokens)
-        if not joined or (joined.isascii() and joined.isdigit()):  # the common case, fast
+        if not joined or (joined.isascii() and joined.isdigit()
+                          and max(map(len, tokens)) <= 9):  # the common case, fast
             deps = tuple(map(int, tokens))
         else:
             values = []
             for token in tokens:
-                if token.isascii() and token.isdigit():
-                    values.append(int(token))
+                value = parse_vr(token)
+                if value is not None:
+                    values.append(value)
                 else:
-                    bad.append(token)
+                    bad.append(token if len(token) <= 40 else token[:37] + "...")
             deps = tuple(values)
     kinds_text = a.get("dependenciesKind")
     kinds = tuple(kinds_text.split()) if kinds_text is not None else None
-    raw_vr = a.get("valueReference")
-    vr = int(raw_vr) if raw_vr is not None and raw_vr.isascii() and raw_vr.isdigit() \
-        else parse_uint(raw_vr)
+    vr = parse_vr(a.get("valueReference"))
     return Unknown(kind=kind, vr=vr, dependencies=deps,
                    dependencies_kind=kinds, line=el.sourceline, file=file, path=path,
                    bad_tokens=tuple(bad), index=a.get("index"))

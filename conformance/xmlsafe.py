@@ -39,6 +39,8 @@ KNOWN_PREFIXES = {
 
 _UNDEFINED_PREFIX = re.compile(r"Namespace prefix (\S+?) (?:for (\S+) )?on (\S+) is not defined")
 _DECLARATION = re.compile(rb"^<\?xml\s[^>]*?\?>")
+# The root element's name: the first "<" that opens an element (not <?, <!, a comment).
+_ROOT_START = re.compile(rb"<(?![?!])[A-Za-z_][\w.:-]*")
 _DECLARED_ENCODING = re.compile(rb"""\sencoding\s*=\s*["']([A-Za-z0-9._:-]*)["']""")
 _UTF8_NAMES = {"utf-8", "utf8"}
 # libxml2 error types that mean "entity handling stopped the parse", not a syntax slip.
@@ -68,16 +70,21 @@ def make_parser() -> etree.XMLParser:
 
 
 def parse_xml(
-    data: bytes, *, file: str, require_declaration: bool = False
+    data: bytes, *, file: str, require_declaration: bool = False, bind_prefixes: bool = False
 ) -> tuple[etree._ElementTree | None, list[Violation]]:
     """Parse ``data`` (the bytes of ``file`` inside the FMU) without ever trusting it.
 
     Returns the tree, or None when the document is not well-formed or not safe to use, and the
     violations found. With ``require_declaration`` a missing ``<?xml ... encoding="UTF-8"?>``
-    declaration is reported (AR-04 asks it of modelDescription.xml). Never raises.
+    declaration is reported (AR-04 asks it of modelDescription.xml). With ``bind_prefixes``, a
+    document whose only fault is a known prefix used without its declaration (``fmi-ls:``, as
+    one exporter writes the manifest) is still reported as not namespace-well-formed, and then
+    read the way importers read it, the prefix bound to its namespace, so that the other rules
+    run in the same pass. Never raises.
     """
     try:
-        tree, violations = _parse(bytes(data), file=file, require_declaration=require_declaration)
+        tree, violations = _parse(bytes(data), file=file, require_declaration=require_declaration,
+                                  bind_prefixes=bind_prefixes)
     except Exception as exc:  # untrusted input: anything unexpected is a finding, not a crash
         log.debug("unexpected failure parsing %s", file, exc_info=True)
         message = f"cannot be parsed: {type(exc).__name__}: {exc}"
@@ -88,7 +95,7 @@ def parse_xml(
 
 
 def _parse(
-    data: bytes, *, file: str, require_declaration: bool
+    data: bytes, *, file: str, require_declaration: bool, bind_prefixes: bool = False
 ) -> tuple[etree._ElementTree | None, list[Violation]]:
     where = Location(file=file)
     if not data.strip():
@@ -116,7 +123,39 @@ def _parse(
     if not problems:
         return None, violations + [Violation(
             f"is not well-formed XML: {failure or 'no root element'}", where, rule=NOT_WELL_FORMED)]
-    return None, violations + _failure_violations(problems, data, file, violations)
+    found = _failure_violations(problems, data, file, violations)
+    if bind_prefixes:
+        bound = _read_with_prefixes_bound(data, problems, file)
+        if bound is not None:
+            tree, uris = bound
+            note = evidence(read_as_importers_do=[f'xmlns:{p}="{u}"' for p, u in uris.items()])
+            return tree, violations + [replace(v, evidence=v.evidence + note) for v in found]
+    return None, violations + found
+
+
+def _read_with_prefixes_bound(data: bytes, problems: list[etree._LogEntry], file: str
+                              ) -> tuple[etree._ElementTree, dict[str, str]] | None:
+    """The tree of ``data`` with its undeclared known prefixes declared on the root element, or
+    None when anything else is wrong (then nothing is read). The declarations go into the root
+    start tag, on its line, so every line number stays as it was."""
+    uris: dict[str, str] = {}
+    for problem in problems:
+        match = _UNDEFINED_PREFIX.search(problem.message or "")
+        if problem.type_name != "NS_ERR_UNDEFINED_NAMESPACE" or match is None:
+            return None
+        prefix = match.group(1)
+        if prefix not in KNOWN_PREFIXES:
+            return None
+        uris[prefix] = KNOWN_PREFIXES[prefix]
+    root = _ROOT_START.search(data)
+    if root is None or not uris:
+        return None
+    declarations = "".join(f' xmlns:{p}="{u}"' for p, u in uris.items()).encode()
+    fixed = data[:root.end()] + declarations + data[root.end():]
+    tree, violations = _parse(fixed, file=file, require_declaration=False)
+    if tree is None or any(v.rule == NOT_WELL_FORMED for v in violations):
+        return None
+    return tree, uris
 
 
 def _failure_violations(problems: list[etree._LogEntry], data: bytes, file: str,

@@ -1,10 +1,17 @@
-"""Build the lsdae test-scene FMUs from scenes/<Name>/.
+"""Build the lsdae test-scene FMUs from scenes/<Name>/ and the corpus from scenes/corpus/<Name>/.
 
 Each scene folder holds ``model.c`` (plus optional model-specific ``*.c``/``*.h``),
 ``modelDescription.xml`` and ``fmi-ls-manifest.xml``.  The C framework in
 ``scenes/common/`` is compiled together with the model into
 ``binaries/<platform-tuple>/<modelIdentifier>.<ext>`` and zipped with the two XML
 files into ``<Name>.fmu``.
+
+The corpus (``scenes/corpus/<Name>/``) holds ordinary FMI 3.0 FMUs that do not use the
+fmi-ls-dae layer: Model Exchange, Co-Simulation or Scheduled Execution, no manifest. Their
+``model.c`` is compiled with ``scenes/corpus/common/corpus_fmu.c``; every other file of the
+folder except C sources and README.md (``terminalsAndIcons/...``) goes into the FMU at the
+same relative path. A folder with an ``fmi-ls-manifest.xml`` gets it as the manifest; one
+without is built without.
 
 Results are cached by a hash of every input (sources, XML, defines, compiler and
 its version, FMI headers, this file).  The cache lives in ``<repo>/.cache/scenes``
@@ -37,9 +44,14 @@ from typing import Sequence
 SCENES_DIR = Path(__file__).resolve().parent
 REPO_ROOT = SCENES_DIR.parent
 COMMON_DIR = SCENES_DIR / "common"
+CORPUS_DIR = SCENES_DIR / "corpus"
+CORPUS_COMMON_DIR = CORPUS_DIR / "common"
 DEFAULT_CACHE_DIR = REPO_ROOT / ".cache" / "scenes"
 CACHE_ENV_VAR = "LSDAE_SCENE_CACHE"
 MANIFEST_ENTRY = "extra/org.fmi-standard.fmi-ls-dae/fmi-ls-manifest.xml"
+MANIFEST_FILE = "fmi-ls-manifest.xml"
+INTERFACES = ("ModelExchange", "CoSimulation", "ScheduledExecution")
+_NOT_PACKED = {".c", ".h"}
 CFLAGS = ("-std=c99", "-O2", "-Wall", "-Wextra", "-pedantic", "-shared", "-fPIC",
           "-fvisibility=hidden")
 _ZIP_DATE = (1980, 1, 1, 0, 0, 0)  # fixed timestamps: reproducible archives
@@ -56,12 +68,33 @@ def scene_names() -> list[str]:
                   if (p / "model.c").is_file() and (p / "modelDescription.xml").is_file())
 
 
+def corpus_names() -> list[str]:
+    """All corpus folders (scenes/corpus/<Name>/ with a model.c and a modelDescription.xml)."""
+    return sorted(p.name for p in CORPUS_DIR.iterdir()
+                  if (p / "model.c").is_file() and (p / "modelDescription.xml").is_file())
+
+
+def is_corpus(name: str) -> bool:
+    return name in corpus_names()
+
+
 def scene_xml_dir(name: str) -> Path:
-    """Folder holding the scene's modelDescription.xml and fmi-ls-manifest.xml."""
-    path = SCENES_DIR / name
-    if name not in scene_names():
-        raise SceneBuildError(f"unknown scene {name!r} (known: {', '.join(scene_names())})")
-    return path
+    """Folder holding the scene's modelDescription.xml (and fmi-ls-manifest.xml, if any)."""
+    if name in scene_names():
+        return SCENES_DIR / name
+    if name in corpus_names():
+        return CORPUS_DIR / name
+    raise SceneBuildError(f"unknown scene {name!r} (known: "
+                          f"{', '.join(scene_names() + corpus_names())})")
+
+
+def _packed_files(name: str) -> list[Path]:
+    """Files of a corpus folder that go into the FMU as they are (not the C sources)."""
+    if not is_corpus(name):
+        return []
+    folder = scene_xml_dir(name)
+    return sorted(p for p in folder.rglob("*") if p.is_file() and p.suffix not in _NOT_PACKED
+                  and p.name not in ("modelDescription.xml", MANIFEST_FILE, "README.md"))
 
 
 def platform_tuple() -> str:
@@ -116,21 +149,32 @@ def _normalize_defines(defines: Sequence[str]) -> list[str]:
 
 def _source_files(name: str) -> list[Path]:
     scene = scene_xml_dir(name)
-    files = [p for p in COMMON_DIR.iterdir() if p.suffix in (".c", ".h")]
+    common = CORPUS_COMMON_DIR if is_corpus(name) else COMMON_DIR
+    files = [p for p in common.iterdir() if p.suffix in (".c", ".h")]
     files += [p for p in scene.iterdir() if p.suffix in (".c", ".h", ".xml")]
-    return sorted(files)
+    return sorted(set(files) | set(_packed_files(name)))
 
 
 def _xml_info(md_path: Path) -> tuple[str, str]:
-    """(modelIdentifier of ModelExchange, instantiationToken)."""
+    """(modelIdentifier, instantiationToken).
+
+    A scene needs <ModelExchange>; a corpus model any interface type, all with one
+    modelIdentifier (one library serves them all).
+    """
     root = ET.parse(md_path).getroot()
-    me = root.find("ModelExchange")
-    if me is None or not me.get("modelIdentifier"):
-        raise SceneBuildError(f"{md_path}: no <ModelExchange modelIdentifier=...>")
+    corpus = md_path.parent.parent == CORPUS_DIR
+    found = {tag: el.get("modelIdentifier") for tag in INTERFACES
+             if (el := root.find(tag)) is not None and (corpus or tag == "ModelExchange")}
+    identifiers = set(found.values())
+    if not found or None in identifiers or "" in identifiers:
+        wanted = "<ModelExchange|CoSimulation|ScheduledExecution" if corpus else "<ModelExchange"
+        raise SceneBuildError(f"{md_path}: no {wanted} modelIdentifier=...>")
+    if len(identifiers) > 1:
+        raise SceneBuildError(f"{md_path}: interface types with different modelIdentifiers")
     token = root.get("instantiationToken", "")
     if not token or any(ch in token for ch in '"\\\n'):
         raise SceneBuildError(f"{md_path}: unusable instantiationToken {token!r}")
-    return me.get("modelIdentifier"), token
+    return identifiers.pop(), token
 
 
 def _cache_key(name: str, defines: list[str], cc: str) -> str:
@@ -155,8 +199,10 @@ def _cache_key(name: str, defines: list[str], cc: str) -> str:
 
 def _compile(name: str, defines: list[str], cc: str, token: str, library: Path) -> str:
     scene = scene_xml_dir(name)
-    sources = [COMMON_DIR / "fmi3_framework.c"] + sorted(scene.glob("*.c"))
-    cmd = [cc, *CFLAGS, f"-I{COMMON_DIR}", f"-I{scene}", f"-I{fmi_headers_dir()}",
+    common = CORPUS_COMMON_DIR if is_corpus(name) else COMMON_DIR
+    framework = "corpus_fmu.c" if is_corpus(name) else "fmi3_framework.c"
+    sources = [common / framework] + sorted(scene.glob("*.c"))
+    cmd = [cc, *CFLAGS, f"-I{common}", f"-I{scene}", f"-I{fmi_headers_dir()}",
            f'-DFMU_INSTANTIATION_TOKEN="{token}"', *[f"-D{d}" for d in defines],
            *map(str, sources), "-o", str(library), "-lm"]
     proc = subprocess.run(cmd, capture_output=True, text=True, check=False)
@@ -202,7 +248,10 @@ def build_scene(name: str, *, defines: Sequence[str] = (), cache_dir: Path | Non
         with zipfile.ZipFile(tmp_fmu, "w") as zf:
             _zip_entry(zf, "modelDescription.xml", (scene / "modelDescription.xml").read_bytes())
             _zip_entry(zf, f"binaries/{platform_tuple()}/{library.name}", library.read_bytes())
-            _zip_entry(zf, MANIFEST_ENTRY, (scene / "fmi-ls-manifest.xml").read_bytes())
+            if (scene / MANIFEST_FILE).is_file():  # a corpus model has none
+                _zip_entry(zf, MANIFEST_ENTRY, (scene / MANIFEST_FILE).read_bytes())
+            for path in _packed_files(name):
+                _zip_entry(zf, path.relative_to(scene).as_posix(), path.read_bytes())
         tmp_log = tmp_path / "build.log"
         tmp_log.write_text(log)
         os.replace(tmp_log, out_dir / "build.log")
@@ -213,7 +262,10 @@ def build_scene(name: str, *, defines: Sequence[str] = (), cache_dir: Path | Non
 def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m scenes.build",
                                      description="Build the lsdae test-scene FMUs.")
-    parser.add_argument("scenes", nargs="*", help=f"scene names (default: all of {scene_names()})")
+    parser.add_argument("scenes", nargs="*", help="scene or corpus names (default: every scene "
+                        f"{scene_names()}); --corpus: every corpus model {corpus_names()}")
+    parser.add_argument("--corpus", action="store_true",
+                        help="build the corpus of non-DAE FMUs (scenes/corpus/) as well")
     parser.add_argument("--out", type=Path, help="copy the built FMUs into this folder")
     parser.add_argument("-D", dest="defines", action="append", default=[], metavar="MACRO",
                         help="preprocessor define, e.g. -D DEFECT_WRONG_JACOBIAN (repeatable)")
@@ -221,7 +273,10 @@ def main(argv: Sequence[str] | None = None) -> int:
                         f"or {DEFAULT_CACHE_DIR})")
     args = parser.parse_args(argv)
     try:
-        for name in args.scenes or scene_names():
+        names = list(args.scenes) or scene_names()
+        if args.corpus:
+            names = list(args.scenes) + corpus_names()
+        for name in names:
             fmu = build_scene(name, defines=args.defines, cache_dir=args.cache_dir)
             if args.out:
                 args.out.mkdir(parents=True, exist_ok=True)

@@ -10,7 +10,7 @@ from pathlib import Path
 
 from conformance.manifest import MANIFEST
 from conformance.model import MODEL_DESCRIPTION
-from scenes.build import SCENES_DIR
+from scenes.build import SCENES_DIR, scene_xml_dir
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -54,7 +54,8 @@ def all_cases() -> list[Case]:
 
 
 def scene_xml(base: str) -> dict[str, Path]:
-    folder = SCENES / base
+    """The XML of a scene or of a corpus model (which has no manifest)."""
+    folder = scene_xml_dir(base)
     return {MODEL_DESCRIPTION: folder / "modelDescription.xml",
             MANIFEST: folder / "fmi-ls-manifest.xml"}
 

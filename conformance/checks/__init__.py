@@ -10,6 +10,7 @@ from ..context import Check
 from . import (
     algebraic,
     attribute_values,
+    dae_form,
     enable,
     header,
     index1,
@@ -24,7 +25,7 @@ from . import (
 )
 
 REGISTRY: dict[str, Check] = {}
-for _module in (header, enable, algebraic, residual, manifest_dependencies, manifest_lists,
+for _module in (header, enable, algebraic, residual, dae_form, manifest_dependencies, manifest_lists,
                 model_variables, model_structure, attribute_values, index1, model_types,
                 model_names, model_references):
     for _code, _check in _module.CHECKS.items():

@@ -32,9 +32,15 @@ def _semver_key(text: str) -> tuple | None:
         return None
     pre = m.group(4)
     ids = () if pre is None else tuple(
-        (0, int(p), "") if p.isdigit() else (1, 0, p) for p in pre.split("."))
+        (0, _numeric(p), "") if p.isdigit() else (1, (0, ""), p) for p in pre.split("."))
     # a release ranks above every pre-release of the same version
-    return (int(m.group(1)), int(m.group(2)), int(m.group(3)), pre is None, ids)
+    return (_numeric(m.group(1)), _numeric(m.group(2)), _numeric(m.group(3)), pre is None, ids)
+
+
+def _numeric(digits: str) -> tuple[int, str]:
+    """A numeric identifier's rank without int(): no leading zeros, so the longer is larger and
+    equal lengths compare as text (a component of thousands of digits is not an exception)."""
+    return (len(digits), digits)
 
 
 _ALPHA1_KEY: tuple = _semver_key(ALPHA1_VERSION) or ()

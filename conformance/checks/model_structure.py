@@ -100,8 +100,12 @@ def model_structure_derivative_missing(ctx: CheckContext) -> Iterator[Violation]
     continuous floats, local or output, and not both outputs (MV-30 allows linking an output to
     the output it is the derivative of without making either a state), and when no listed
     derivative already covers that state.
+
+    Only Model Exchange must list them: a Co-Simulation or Scheduled Execution FMU may leave
+    the list out (FMI 3.0 §2.4.8, InitialUnknown: "if a Co-Simulation FMU does not define the
+    ContinuousStateDerivative elements, ...").
     """
-    if (model := ctx.model) is None:
+    if (model := ctx.model) is None or model.model_exchange is None:
         return
     by_vr = model.by_vr
     listed: set[int] = set()
@@ -162,8 +166,8 @@ def model_structure_initial_unknown_mismatch(ctx: CheckContext) -> Iterator[Viol
 
 def directional_derivatives_missing(ctx: CheckContext) -> Iterator[Violation]:
     """DAE514 CF-05, DAE-50: a DAE FMU should provide directional derivatives for dg/dw."""
-    model, manifest = ctx.model, ctx.manifest
-    if model is None or manifest is None or model.model_exchange is None:
+    model = ctx.model
+    if model is None or not ctx.dae_layer or model.model_exchange is None:
         return
     me = model.model_exchange
     if me.flag("providesDirectionalDerivatives"):

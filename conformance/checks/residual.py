@@ -23,6 +23,7 @@ from ..manifest import VrRef
 from ..model import Variable
 from ..unknowns import Unknown
 from .algebraic import continuous_states, element_count, resolved_vrs
+from .dae_form import fully_implicit
 from .listing import classified, facts, first_listings, repeats
 
 log = logging.getLogger(__name__)
@@ -144,8 +145,8 @@ def residual_count_mismatch(ctx: CheckContext) -> Iterator[Violation]:
             return
         sides.append((sum(known), [v.name for v in variables.values()]))
     (n_alg, alg_names), (n_res, res_names) = sides
-    if n_alg == n_res:
-        return
+    if n_alg == n_res or fully_implicit(model, manifest) is not None:
+        return  # the fully implicit form is fully-implicit-form's finding
     if manifest.algebraic_line is not None:
         where = Location(file=manifest.file, line=manifest.algebraic_line,
                          path=f"/{manifest.root_name}/AlgebraicVariables")

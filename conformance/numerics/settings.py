@@ -40,6 +40,7 @@ class Settings:
     stalled_condition: float            # a run that stalls or fails with dg/dw this bad: singular
     record_wall_time: bool              # wall_s in the report (not reproducible: off in check)
     output_times: tuple[float, ...] = ()  # explicit output times (replace the grid)
+    start_values: tuple[tuple[str, float], ...] = ()  # (variable name, value), set before init
 
     @classmethod
     def from_options(cls, options: Mapping[str, Any]) -> Settings:
@@ -48,6 +49,8 @@ class Settings:
         values = {k: v for k, v in options.items() if k in known}
         if "output_times" in values:
             values["output_times"] = tuple(float(t) for t in values["output_times"])
+        if "start_values" in values:
+            values["start_values"] = tuple((str(n), float(v)) for n, v in values["start_values"])
         settings = cls(**values)
         settings.validate()
         return settings
@@ -63,6 +66,7 @@ class Settings:
     def as_options(self) -> dict[str, Any]:
         out = {f.name: getattr(self, f.name) for f in fields(self)}
         out["output_times"] = list(self.output_times)
+        out["start_values"] = [list(pair) for pair in self.start_values]
         return out
 
     def stop(self, start: float, default_stop: float | None) -> float:
@@ -113,6 +117,8 @@ class Trajectory:
     max_condition_t: float | None = None
     init: dict[str, Any] = field(default_factory=dict)
     event: dict[str, Any] = field(default_factory=dict)
+    # DAE mode: the largest |residual| at the output times ({"max_abs", "residual", "t"})
+    residual_along: dict[str, Any] = field(default_factory=dict)
 
     @property
     def ok(self) -> bool:
@@ -141,6 +147,8 @@ class Trajectory:
             "recovered": self.recovered, "max_condition": _json_float(self.max_condition),
             "max_condition_t": self.max_condition_t, "init": self.init, "event": self.event,
         }
+        if self.residual_along:
+            info["residual_along"] = self.residual_along
         if timing:
             info["wall_s"] = round(self.wall_s, 6)
         return info
@@ -167,7 +175,8 @@ class Trajectory:
             jacobian=str(info.get("jacobian", "")), recovered=int(info.get("recovered", 0)),
             max_condition=_float(info.get("max_condition")),
             max_condition_t=info.get("max_condition_t"), init=dict(info.get("init") or {}),
-            event=dict(info.get("event") or {}))
+            event=dict(info.get("event") or {}),
+            residual_along=dict(info.get("residual_along") or {}))
 
 
 def _json_float(value: Any) -> float | None:

@@ -19,7 +19,7 @@ on top of fmpy), which records the call in progress, the FMI status and the FMU'
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Callable, Iterable, Sequence
+from typing import Any, Callable, Iterable, Mapping, Sequence
 
 import numpy as np
 
@@ -53,8 +53,14 @@ class ProbeContext:
     points: Sequence[Point]
     dae: Evaluator | None
     ode: Evaluator | None
-    new_instance: Callable[[str], Evaluator]    # a fresh instance in mode "dae" or "ode"
+    # a fresh instance in mode "dae" or "ode"; start_values= (vr -> value) set before it starts
+    new_instance: Callable[..., Evaluator]
     facts: dict[str, object] = field(default_factory=dict)  # shared between probes (memo)
+    endurance: str = "quick"       # the endurance level (--endurance): "quick" or "long"
+    died: tuple[str, ...] = ()     # probes during which an earlier worker of this FMU died
+    # A fresh instance in Initialization Mode: (mode, start values by vr, start time) -> an
+    # object with get_float64, directional_as_set and free (runtime.modes.start_initialization)
+    new_initialization: Callable[[str, Mapping[int, float], float], Any] | None = None
 
 
 Probe = Callable[..., Iterable[Violation]]
@@ -67,4 +73,6 @@ Probe = Callable[..., Iterable[Violation]]
 #   "probe_errors": [{"rule": code, "entry": "d(g1)/d(y)", "error": float,
 #                     "tolerance": float}, ...]
 #   "points": [{"label": str, "t": float, "values": {name: float}}], "seed": int
-INFO_KEYS = ("jacobian", "probe_errors", "points", "seed")
+#   "endurance": {"level": str, "path_calls": int, "path_steps": int, "laps": int,
+#                 "stopped": str, "budget_calls": int, "cycles": int}   (docs/json-report.md)
+INFO_KEYS = ("jacobian", "probe_errors", "points", "seed", "endurance")

@@ -27,13 +27,13 @@ import numpy as np
 from ..findings import Violation, evidence
 from .api import FmiError, ProbeContext, ProbeSkipped
 from .entry_comparison import (
-    Worst,
     call_failures,
     closest_entries,
     entry_errors,
     entry_violations,
-    keep_worst,
+    kind_changes,
     mismatched_entries,
+    undeclared_entries,
 )
 from .jacobian import (
     FACT,
@@ -43,7 +43,6 @@ from .jacobian import (
     build_layout,
     point_evidence,
     record_errors,
-    row_scale,
     run_survey,
     survey,
     surveyed,
@@ -117,23 +116,7 @@ def dependency_undeclared(ctx: ProbeContext, *, rtol: float, margin: float,
     s = surveyed(ctx)
     layout = s.layout
     assert layout is not None
-    worst: dict[tuple[int, int], Worst] = {}
-    for ps in s.points:
-        e = ps.entries
-        scale = row_scale(layout, e, declared_only=True)[e.rows]
-        nominal = layout.nominal[e.cols]
-        err = e.error(ulps)
-        size = np.abs(e.fd) * nominal
-        tol = margin * err * nominal + rtol * scale
-        clear = ~e.declared & ~e.zero & np.isfinite(size) & (size > tol)
-        for k in np.flatnonzero(clear):
-            if not layout.rows[e.rows[k]].explicit:
-                continue
-            keep_worst(worst, (int(e.rows[k]), int(e.cols[k])),
-                        float(size[k] / tol[k]) if tol[k] > 0 else np.inf, ps,
-                        {"finite_difference": float(e.fd[k]), "error_estimate": float(err[k]),
-                         "tolerance": float(tol[k] / nominal[k]),
-                         "row_scale": float(scale[k])})
+    worst = undeclared_entries(s, rtol=rtol, margin=margin, ulps=ulps)
     record_errors(ctx, "DAE742", [(layout.entry(i, j), abs(w.items["finite_difference"]),
                                     w.items["tolerance"]) for (i, j), w in worst.items()])
     for (i, j), w in sorted(worst.items()):
@@ -201,29 +184,14 @@ def dependencies_kind_violated(ctx: ProbeContext, *, rtol: float, margin: float,
     kind_of = {(i, j): k for i, j, k in zip(layout.pattern.rows.tolist(),
                                             layout.pattern.cols.tolist(), layout.kinds)
                if k != "dependent" and layout.rows[i].explicit}
-    samples: dict[tuple[int, int], list] = {}
-    for ps in s.points:
-        e = ps.entries
-        scale = row_scale(layout, e)
-        err = e.error(ulps)
-        for k, (i, j) in enumerate(zip(e.rows.tolist(), e.cols.tolist())):
-            if (i, j) in kind_of and e.declared[k] and np.isfinite(e.fd[k]):
-                samples.setdefault((i, j), []).append(
-                    (float(e.fd[k]), float(err[k]), float(scale[i] / layout.nominal[j]), ps))
-    for (i, j), values in sorted(samples.items()):
-        hi = max(values, key=lambda v: v[0])
-        lo = min(values, key=lambda v: v[0])
-        tol = margin * (hi[1] + lo[1]) + rtol * max(v[2] for v in values)
-        if hi[0] - lo[0] > tol:
-            yield Violation(
-                f"{{subject}}: declared '{kind_of[(i, j)]}', but the partial derivative "
-                "changes between sampling points (the unknown is not affine in the known)",
-                layout.rows[i].location,
-                evidence(entry=layout.entry(i, j), kind=kind_of[(i, j)], smallest=lo[0],
-                         largest=hi[0], tolerance=tol,
-                         points=[point_evidence(layout, lo[3]), point_evidence(layout, hi[3])]),
-                subject=layout.entry(i, j))
-
+    for (i, j), c in kind_changes(s, kind_of, rtol=rtol, margin=margin, ulps=ulps).items():
+        yield Violation(
+            f"{{subject}}: declared '{c.kind}', but the partial derivative changes between "
+            "sampling points (the unknown is not affine in the known)", layout.rows[i].location,
+            evidence(entry=layout.entry(i, j), kind=c.kind, smallest=c.lo[0],
+                     largest=c.hi[0], tolerance=c.tolerance,
+                     points=[point_evidence(layout, c.lo[2]), point_evidence(layout, c.hi[2])]),
+            subject=layout.entry(i, j))
 
 
 PROBES = {

@@ -4,7 +4,9 @@
 :func:`conformance.probes.stage.run_job`) in the FMU's private temporary directory, reads its
 events, enforces the time limits, and turns a crash, hang or memory blow-up into a ``binary-*``
 finding naming the probe and the FMI call in progress, read from the shared
-:class:`~conformance.runtime.callrecord.CallRecord`. The run it serves
+:class:`~conformance.runtime.callrecord.CallRecord` (a death during a probe of ``COUNTED``, the
+endurance probes, also says after how many FMI calls). Each new worker is told the probes
+during which an earlier one died (``ProbeJob.died``). The run it serves
 (``conformance.probes.runner``) holds the outcome and the limits; its docstring gives the policy.
 """
 from __future__ import annotations
@@ -20,9 +22,10 @@ from typing import Any
 
 from ..catalogue import RuleSpec
 from ..findings import Location, Violation, evidence
-from ..runtime.callrecord import CallRecord
+from ..runtime.callrecord import CallCounts, CallRecord
 from ..runtime.protocol import Job, violation_from_json
 from ..runtime.supervisor import WorkerProcess
+from .endurance import PROBES as COUNTED
 from .stage import ENTRY, ProbeJob
 
 CRASHED, TIMED_OUT, MEMORY, NOT_LOADABLE = (
@@ -49,6 +52,7 @@ class Driver:
         self.stderr_file = os.path.join(tmp, "worker.log")
         self.fmu_deadline = time.monotonic() + self.limits.fmu_seconds
         self.blocked: list[str] = []   # FMI functions that hung: not called again
+        self.died: list[str] = []      # probes during which a worker died or was killed
 
     def drive(self) -> None:
         restarts = 0
@@ -57,27 +61,28 @@ class Driver:
             done = {c for c, _ in self.run.outcome.skipped} | self.run.outcome.run
             self.remaining = [r for r in self.remaining if r.code not in done]
             if result.kind == "end":
-                self.run.skip(self.remaining, "not run: the worker ended early")
+                self.run.skip(self.remaining, "not run: the worker ended early", failed=True)
                 return
             if result.kind == "load-failed":
-                self.run.skip(self.remaining, "the binary cannot be loaded (binary-not-loadable)")
+                self.run.skip(self.remaining, "the binary cannot be loaded (binary-not-loadable)",
+                              failed=True)
                 return
             if result.kind == "fatal" and not self.remaining:
                 return
             if result.kind == "fmu-timeout":
                 self.run.skip(self.remaining, f"the per-FMU time limit of "
-                              f"{self.limits.fmu_seconds:g} s was reached")
+                              f"{self.limits.fmu_seconds:g} s was reached", failed=True)
                 return
             if result.probe in ("setup", ""):
                 self.run.skip(self.remaining, "the worker failed before the probes could run "
-                              "(see the findings)")
+                              "(see the findings)", failed=True)
                 return
             if not self.remaining:
                 return
             restarts += 1
             if restarts > self.limits.max_restarts:
                 self.run.skip(self.remaining, f"not run: the worker was restarted "
-                              f"{self.limits.max_restarts} times")
+                              f"{self.limits.max_restarts} times", failed=True)
                 return
 
     # -- one worker process --------------------------------------------------------------
@@ -85,7 +90,8 @@ class Driver:
     def _start(self) -> subprocess.Popen[bytes]:
         ctx = self.run.ctx
         payload = ProbeJob(model=ctx.model, manifest=ctx.manifest, draft=ctx.draft,
-                           seed=self.run.seed,
+                           seed=self.run.seed, endurance=self.run.endurance,
+                           died=list(self.died),
                            probes=[(r.code, r.name, r.option_values) for r in self.remaining])
         job = Job(directory=os.path.join(self.tmp, "fmu"), call_file=self.call_file,
                   entry=ENTRY, payload=payload, blocked=list(self.blocked))
@@ -169,6 +175,7 @@ class Driver:
         skipped = event.get("skipped")
         if skipped and not violations:
             outcome.skipped.add((code, str(skipped)))
+            outcome.not_run.add((code, str(skipped)))
         else:
             outcome.run.add(code)
         for key, value in (event.get("info") or {}).items():
@@ -207,10 +214,25 @@ class Driver:
             where = f"during {call}"
         else:
             where = f"after {call} had returned"
-        facts = {"probe": probe, "call": call or None, "call_in_progress": in_progress}
+        facts: dict[str, Any] = {"probe": probe, "call": call or None,
+                                 "call_in_progress": in_progress}
+        if call and probe in COUNTED:
+            counts = self._counts()
+            total, in_probe = counts.completed(in_progress), counts.completed_in_probe(in_progress)
+            where += f", after {in_probe:,} FMI calls in this probe ({total:,} in this worker)"
+            facts.update(call_count=total, calls_in_probe=in_probe)
         if probe in self.run.by_name or any(r.code == probe for r in self.run.rules):
             self.run.outcome.run.add(probe)
+        if probe:
+            self.died.append(probe)
         return probe, call, where, facts
+
+    def _counts(self) -> CallCounts:
+        try:
+            with open(self.call_file, "rb") as fh:
+                return CallRecord.counts(fh.read(CallRecord.SIZE))
+        except OSError:
+            return CallCounts(0, 0)
 
     def _timed_out(self, current: str, per_fmu: bool) -> str:
         probe, call, where, facts = self._context(current)

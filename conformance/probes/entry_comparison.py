@@ -7,7 +7,7 @@ plus ``rtol * S_i / nominal_j``. The tolerances are the calling rule's catalogue
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Iterator
+from typing import Iterator, Mapping
 
 import numpy as np
 
@@ -88,6 +88,73 @@ def mismatched_entries(s: Survey, which: str, *, rtol: float, margin: float, ulp
                          "row_scale": float(scale[k] * layout.nominal[e.cols[k]]),
                          "declared": bool(e.declared[k])})
     return worst
+
+
+def undeclared_entries(s: Survey, *, rtol: float, margin: float, ulps: float) -> dict:
+    """Entries the dependencies leave out that are clearly non-zero at some point, in rows that
+    make a claim (an explicit dependencies list): ``|fd| * nominal_j`` above ``margin`` times
+    its error estimate (times ``nominal_j``) plus ``rtol`` times the row scale of the declared
+    entries. The worst point of each, with its evidence items."""
+    layout = s.layout
+    assert layout is not None
+    worst: dict[tuple[int, int], Worst] = {}
+    for ps in s.points:
+        e = ps.entries
+        scale = row_scale(layout, e, declared_only=True)[e.rows]
+        nominal = layout.nominal[e.cols]
+        err = e.error(ulps)
+        size = np.abs(e.fd) * nominal
+        tol = margin * err * nominal + rtol * scale
+        clear = ~e.declared & ~e.zero & np.isfinite(size) & (size > tol)
+        for k in np.flatnonzero(clear):
+            if not layout.rows[e.rows[k]].explicit:
+                continue
+            keep_worst(worst, (int(e.rows[k]), int(e.cols[k])),
+                       float(size[k] / tol[k]) if tol[k] > 0 else np.inf, ps,
+                       {"finite_difference": float(e.fd[k]), "error_estimate": float(err[k]),
+                        "tolerance": float(tol[k] / nominal[k]),
+                        "row_scale": float(scale[k])})
+    return worst
+
+
+@dataclass
+class KindChange:
+    """A declared entry that is not 'dependent' but changed between points: the smallest and
+    largest finite difference (value, error estimate, point) and the tolerance."""
+
+    kind: str
+    lo: tuple[float, float, PointSurvey]
+    hi: tuple[float, float, PointSurvey]
+    tolerance: float
+    scale: float        # the largest row scale S_i / nominal_j over the points (rtol's unit)
+
+
+def kind_changes(s: Survey, kinds: Mapping[tuple[int, int], str], *, rtol: float,
+                 margin: float, ulps: float) -> dict[tuple[int, int], KindChange]:
+    """The entries of ``kinds`` (declared, not 'dependent') whose finite differences differ
+    between the points by more than ``margin`` times their two error estimates plus ``rtol``
+    times the largest row scale over ``nominal_j``: the unknown is not affine in the known."""
+    layout = s.layout
+    assert layout is not None
+    samples: dict[tuple[int, int], list] = {}
+    for ps in s.points:
+        e = ps.entries
+        scale = row_scale(layout, e)
+        err = e.error(ulps)
+        for k, (i, j) in enumerate(zip(e.rows.tolist(), e.cols.tolist())):
+            if (i, j) in kinds and e.declared[k] and np.isfinite(e.fd[k]):
+                samples.setdefault((i, j), []).append(
+                    (float(e.fd[k]), float(err[k]), float(scale[i] / layout.nominal[j]), ps))
+    out: dict[tuple[int, int], KindChange] = {}
+    for (i, j), values in sorted(samples.items()):
+        hi = max(values, key=lambda v: v[0])
+        lo = min(values, key=lambda v: v[0])
+        scale = max(v[2] for v in values)
+        tol = margin * (hi[1] + lo[1]) + rtol * scale
+        if hi[0] - lo[0] > tol:
+            out[(i, j)] = KindChange(kinds[(i, j)], lo[:2] + (lo[3],), hi[:2] + (hi[3],), tol,
+                                     scale)
+    return out
 
 
 def entry_violations(s: Survey, worst: dict, message: str) -> Iterator[Violation]:

@@ -1,5 +1,6 @@
-"""The handshake probes: switching DAE mode on and off (``enable-handshake``) and a refused
-initialisation in DAE mode (``dae-initialization-refused``, information under alpha.1).
+"""The handshake probes: switching DAE mode on and off (``enable-handshake``), a refused
+initialisation in DAE mode (``dae-initialization-refused``, information under alpha.1), and
+fmi3Reset returning the instance to its start values and ODE mode (``reset-incomplete``).
 
 Each probe opens its own instances from the loaded :class:`~conformance.runtime.library.Library`
 (``ctx.facts["library"]``) and walks the FMI calls one by one, so a finding names the call that
@@ -11,7 +12,8 @@ from typing import Any, Iterator
 
 from ..findings import Location, Violation, evidence
 from .api import FmiError, ProbeContext, ProbeSkipped
-from .common import error_evidence, layout_of, manifest_location, new_instance
+from .common import (close, error_evidence, layout_of, manifest_location, new_instance,
+                     var_location)
 from ..runtime.instance import Instance
 from ..runtime.layout import Layout
 from ..runtime.library import Library
@@ -169,7 +171,60 @@ def dae_initialization_refused(ctx: ProbeContext) -> Iterator[Violation]:
 
 
 
+# ------------------------------------------------------------------------- reset-incomplete
+
+
+def reset_incomplete(ctx: ProbeContext, *, rtol: float, atol: float) -> Iterator[Violation]:
+    """MV-23, DAE-11: after fmi3Reset the instance holds the start values of modelDescription.xml
+    and is in ODE mode (the switch false). The probe switches DAE mode on, sets the states and
+    inputs of a sampled point, resets, and reads back in Instantiated: a variable (or the
+    switch) that kept its value is named. Only variables with a start value the static stage
+    accepts are compared (a fresh instance is no reference: an FMU that keeps state across
+    instances is instances-not-independent's finding, not this one's)."""
+    layout = layout_of(ctx)
+    if ctx.dae is None:
+        raise ProbeSkipped("DAE mode could not be started (see enable-handshake)")
+    vrs = [vr for vr in dict.fromkeys([*layout.states, *layout.inputs])
+           if vr in layout.start and vr not in layout.flagged_start]
+    expected = [layout.start[vr] for vr in vrs]
+    switch = layout.enable if layout.enable_status == "ok" else None
+    expected_switch = False if switch is not None else None
+    if not vrs and switch is None:
+        raise ProbeSkipped("no state or input with a start value, and no enable parameter")
+    point = ctx.points[1] if len(ctx.points) > 1 else ctx.points[0]
+    inst = ctx.new_instance("dae")
+    try:
+        inst.set_point(point, algebraic=False)  # type: ignore[attr-defined]
+        inst.reset()  # type: ignore[attr-defined]
+        try:
+            got = inst.get_float64(vrs)  # type: ignore[attr-defined]
+            got_switch = inst.get_boolean(switch) if switch is not None else None  # type: ignore
+        except FmiError as exc:
+            raise ProbeSkipped(f"after fmi3Reset the FMU does not answer {exc.call} in "
+                               f"Instantiated ({exc.status}): the reset cannot be checked"
+                               ) from None
+    finally:
+        inst.free()  # type: ignore[attr-defined]
+    if switch is not None and got_switch != expected_switch:
+        yield Violation(
+            f"after fmi3Reset the enable parameter {{subject}} is still {str(got_switch).lower()}"
+            f": the FMU stays in DAE mode, and the next run starts in the wrong mode (DAE-11)",
+            manifest_location(ctx, switch, ("Enable",)),
+            evidence(after_reset=got_switch, start=expected_switch, point=point.label),
+            subject=layout.name(switch))
+    for vr, a, b in zip(vrs, got, expected):
+        if not close(float(a), float(b), rtol=rtol, atol=atol, scale=layout.scale(vr)):
+            set_to = point.values.get(vr)
+            yield Violation(
+                "after fmi3Reset {subject} kept a value set before the reset instead of its "
+                "start value (MV-23)", var_location(ctx, vr),
+                evidence(after_reset=float(a), start=float(b), set_before=set_to,
+                         point=point.label, scale=layout.scale(vr)),
+                subject=layout.name(vr))
+
+
 PROBES = {
     "DAE710": enable_handshake,
     "DAE711": dae_initialization_refused,
+    "DAE712": reset_incomplete,
 }

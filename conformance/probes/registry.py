@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from typing import Mapping
 
-from . import basic, derivatives, dgdw, handshake, simulation
+from . import basic, derivatives, dgdw, endurance, handshake, initial_unknowns, simulation
 from .api import Probe
 
 PROBES: dict[str, Probe] = {}
@@ -26,3 +26,5 @@ register(basic.PROBES)
 register(derivatives.PROBES)
 register(dgdw.PROBES)
 register(simulation.PROBES)
+register(initial_unknowns.PROBES)
+register(endurance.PROBES)

@@ -20,10 +20,15 @@ The runner never trusts the worker to finish:
   ``abort()``) is a ``binary-crashed`` finding.
 
 Each of these findings names the probe and the FMI call in progress, read from the shared
-:class:`~conformance.runtime.callrecord.CallRecord` file the worker writes before every FMI call.
+:class:`~conformance.runtime.callrecord.CallRecord` file the worker writes before every FMI call
+(during an endurance probe also after how many FMI calls).
 Violations of probes that completed are kept, and a fresh worker runs the remaining probes (at
 most ``max_restarts`` times, option of ``binary-crashed``). A death during setup ends probing of
 that FMU: a new worker would only die again.
+
+The endurance probes (``conformance.probes.endurance``) run after the other probes, at the level
+the engine passes (``endurance``: "quick" or "long", handed to the worker in the job); at "off"
+the runner skips them with that reason and they cost nothing.
 """
 from __future__ import annotations
 
@@ -37,9 +42,11 @@ from typing import Any, Iterable, Sequence
 
 from ..catalogue import RuleSpec, default_catalogue
 from ..findings import Violation
+from ..layer import NOT_A_DAE_FMU
 from ..manifest import MANIFEST
 from ..runtime.host import host_platform_tuple, library_extension
 from .driver import RUNNER_RULES, Driver
+from .endurance import PROBES as ENDURANCE
 from .registry import PROBES
 
 log = logging.getLogger(__name__)
@@ -71,18 +78,21 @@ class ProbeOutcome:
     violations: list[tuple[str, Violation]] = field(default_factory=list)
     run: set[str] = field(default_factory=set)
     skipped: set[tuple[str, str]] = field(default_factory=set)
+    not_run: set[tuple[str, str]] = field(default_factory=set)   # the failed part of skipped
     info: dict[str, Any] = field(default_factory=dict)
 
 
-def run_probes(source: Any, ctx: Any, rules: Sequence[RuleSpec], *, seed: int = 0
-               ) -> ProbeOutcome:
-    """Run the enabled probe-stage ``rules`` on one FMU; never raises for a bad FMU."""
-    return _Run(source, ctx, rules, seed).run()
+def run_probes(source: Any, ctx: Any, rules: Sequence[RuleSpec], *, seed: int = 0,
+               endurance: str = "quick") -> ProbeOutcome:
+    """Run the enabled probe-stage ``rules`` on one FMU; never raises for a bad FMU.
+    ``endurance`` is the level of the endurance probes: "off", "quick" or "long"."""
+    return _Run(source, ctx, rules, seed, endurance).run()
 
 
 class _Run:
-    def __init__(self, source: Any, ctx: Any, rules: Sequence[RuleSpec], seed: int):
-        self.source, self.ctx, self.seed = source, ctx, seed
+    def __init__(self, source: Any, ctx: Any, rules: Sequence[RuleSpec], seed: int,
+                 endurance: str = "quick"):
+        self.source, self.ctx, self.seed, self.endurance = source, ctx, seed, endurance
         self.outcome = ProbeOutcome()
         self.rules = list(rules)
         self.by_name = {r.name: r for r in rules}
@@ -101,8 +111,14 @@ class _Run:
         code = rule.code if rule else next(r.code for r in self.runner_rules.values() if r)
         self.outcome.violations.append((code, replace(violation, rule=rule_name)))
 
-    def skip(self, rules: Iterable[RuleSpec], reason: str) -> None:
-        self.outcome.skipped.update((r.code, reason) for r in rules)
+    def skip(self, rules: Iterable[RuleSpec], reason: str, *, failed: bool = False) -> None:
+        """Rules that do not run, and why; ``failed``: they should have run on this FMU but
+        could not (an earlier failure, a missing capability, a budget), which every report
+        lists, rather than not applying to it."""
+        pairs = [(r.code, reason) for r in rules]
+        self.outcome.skipped.update(pairs)
+        if failed:
+            self.outcome.not_run.update(pairs)
 
     def names(self, code: str) -> str:
         if code == "setup":
@@ -121,7 +137,9 @@ class _Run:
         if ctx.manifest is None:
             if MANIFEST in ctx.names:
                 return "the manifest cannot be parsed: nothing to probe"
-            return "no fmi-ls-dae manifest: an ordinary Model Exchange FMU"
+            if not ctx.dae_layer:
+                return NOT_A_DAE_FMU
+            return f"no {MANIFEST}: nothing to probe"
         me = ctx.model.model_exchange
         if me is None or not me.model_identifier:
             return "the FMU has no <ModelExchange modelIdentifier=...> interface"
@@ -142,10 +160,15 @@ class _Run:
                 continue
             if rule.code not in PROBES:
                 self.skip([rule], "not implemented")
+            elif rule.code in ENDURANCE and self.endurance == "off":
+                self.skip([rule], "the endurance stage is off (--endurance off)")
             elif not rule.applies_to(self.ctx.draft):
                 self.skip([rule], f"does not apply to draft {self.ctx.draft}")
             else:
                 probes.append(rule)
+        # the endurance probes last: what sustained use does to the FMU (a late crash, state
+        # in C globals) must not change the other probes' verdicts
+        probes.sort(key=lambda rule: rule.code in ENDURANCE)
         tmp = tempfile.mkdtemp(prefix="lsdae-probe-")
         try:
             if self._extract(tmp):

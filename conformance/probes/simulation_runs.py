@@ -116,7 +116,11 @@ def simulate_mode(ctx: ProbeContext, mode: str, settings: Settings | None = None
             raise ProbeSkipped("no states and no algebraic variables to integrate")
     elif not layout.ode_states:
         raise ProbeSkipped("no continuous states in ODE mode")
-    inst = ctx.new_instance(mode)
+    by_name = {layout.name(vr): vr for vr in layout.names}
+    start_values = {by_name[name]: value for name, value in settings.start_values
+                    if name in by_name}
+    inst = ctx.new_instance(mode, start_values=start_values) if start_values else \
+        ctx.new_instance(mode)
     try:
         return simulate_instance(inst, layout, settings, start=start, stop=stop,
                                  model=ctx.model, manifest=ctx.manifest)

@@ -32,7 +32,7 @@ from ..runtime.callrecord import CallRecord
 from ..runtime.child import memory_info
 from ..runtime.layout import Layout
 from ..runtime.library import Library
-from ..runtime.modes import start_instance
+from ..runtime.modes import start_initialization, start_instance
 from ..runtime.protocol import MEMORY_EXIT, Job, violation_json
 from .api import FmiError, ProbeContext, ProbeSkipped
 from .registry import PROBES
@@ -50,6 +50,8 @@ class ProbeJob:
     draft: str | None
     seed: int
     probes: list[tuple[str, str, dict[str, Any]]] = field(default_factory=list)  # code, name, opts
+    endurance: str = "quick"       # the endurance level: "quick" or "long" ("off": not run)
+    died: list[str] = field(default_factory=list)  # probes during which a worker died before
 
 
 def run_job(job: Job, send: Callable[[dict[str, Any]], None]) -> int:
@@ -106,8 +108,11 @@ class _Stage:
         return ProbeContext(
             model=self.payload.model, manifest=self.payload.manifest, draft=self.payload.draft,
             seed=self.payload.seed, rng=rng, points=points, dae=evaluators["dae"],
-            ode=evaluators["ode"], new_instance=lambda mode: start_instance(library, mode),
-            facts=facts)
+            ode=evaluators["ode"], new_instance=lambda mode, start_values=None: start_instance(
+                library, mode, start_values=start_values),
+            facts=facts, endurance=self.payload.endurance, died=tuple(self.payload.died),
+            new_initialization=lambda mode, values, t: start_initialization(
+                library, mode, values, t))
 
     def _probe(self, ctx: ProbeContext, record: CallRecord, code: str, name: str,
                options: dict[str, Any]) -> None:

@@ -19,14 +19,20 @@ EVIDENCE_WIDTH = 100      # long values are cut here
 def render(report: Report, catalogue: Catalogue | None = None, *, color: bool = False,
            **_: object) -> str:
     measured = {r.code for r in catalogue or () if r.stage in EVIDENCE_STAGES}
+    names = {r.code: r.name for r in catalogue or ()}
     out: list[str] = []
     for fmu in report.fmus:
-        out.extend(_fmu(fmu, color, measured))
+        out.extend(_fmu(fmu, color, measured, names))
     errors = sum(f.count(Severity.ERROR) for f in report.fmus)
     warnings = sum(f.count(Severity.WARNING) for f in report.fmus)
-    unchecked = sum(1 for f in report.fmus if f.binary_not_checked)
+    unchecked = sum(1 for f in report.fmus if f.binary_not_checked and not f.not_checked)
+    skipped = sum(1 for f in report.fmus if f.not_checked)
     binaries = (f"; the binary of {_plural(unchecked, 'FMU')} was not checked" if unchecked
                 else "")
+    not_run = sum(len(f.rules_not_run) for f in report.fmus)
+    binaries = (f", {_plural(not_run, 'rule')} not run" if not_run else "") + binaries
+    if skipped:
+        binaries += f"; {_plural(skipped, 'FMU')} not checked (FMI version)"
     out.append(f"checked {len(report.fmus)} FMU{'s' if len(report.fmus) != 1 else ''}: "
                f"{_plural(errors, 'error')}, {_plural(warnings, 'warning')}{binaries}")
     if report.interrupted:
@@ -44,7 +50,7 @@ def _paint(text: str, code: str, color: bool) -> str:
     return f"{code}{text}{_RESET}" if color else text
 
 
-def _fmu(fmu: FmuReport, color: bool, measured: set[str]) -> list[str]:
+def _fmu(fmu: FmuReport, color: bool, measured: set[str], names: dict[str, str]) -> list[str]:
     lines: list[str] = []
     for finding in fmu.findings:
         lines.extend(_finding(fmu, finding, color))
@@ -60,11 +66,34 @@ def _fmu(fmu: FmuReport, color: bool, measured: set[str]) -> list[str]:
     summary = (f"{fmu.path}: {draft}; {_plural(fmu.count(Severity.ERROR), 'error')}, "
                f"{_plural(fmu.count(Severity.WARNING), 'warning')}, "
                f"{fmu.count(Severity.INFO)} info")
+    if fmu.rules_not_run:
+        summary += f", {_plural(len(fmu.rules_not_run), 'rule')} not run"
+    if fmu.not_checked:
+        summary = f"{fmu.path}: not checked ({fmu.not_checked})"
+    lines.extend(_not_run(fmu, names))
     lines.append(_paint(summary, _BOLD, color))
     if fmu.binary_not_checked:
         lines.append(f"  binary not checked: {fmu.binary_not_checked}")
     lines.append("")
     return lines
+
+
+NOT_RUN_LISTED = 3   # rules named one per line; more with the same reason share a line
+
+
+def _not_run(fmu: FmuReport, names: dict[str, str]) -> list[str]:
+    """One line per rule that could not run, with its reason; rules sharing a reason share a
+    line when there are many of them."""
+    by_reason: dict[str, list[str]] = {}
+    for code, reason in fmu.rules_not_run:
+        by_reason.setdefault(reason, []).append(code)
+    lines = []
+    for reason, codes in by_reason.items():
+        if len(codes) <= NOT_RUN_LISTED:
+            lines += [f"not run: {c} {names.get(c, '')}".rstrip() + f": {reason}" for c in codes]
+        else:
+            lines.append(f"not run ({len(codes)} rules: {', '.join(codes)}): {reason}")
+    return lines + ([""] if lines else [])
 
 
 def _finding(fmu: FmuReport, f: Finding, color: bool) -> list[str]:

@@ -164,6 +164,11 @@ def _fmu_section(index: int, fmu: FmuReport, catalogue: Catalogue | None) -> str
     if fmu.binary_not_checked:
         out.append(f'<p class="meta"><strong>Binary not checked:</strong> '
                    f'{escape(fmu.binary_not_checked)}</p>')
+    if fmu.rules_not_run:
+        items = "".join(f"<li><code>{escape(c)}</code>: {escape(r)}</li>"
+                        for c, r in fmu.rules_not_run)
+        out.append(f'<p class="meta"><strong>Not run ({len(fmu.rules_not_run)}):</strong></p>'
+                   f"<ul>{items}</ul>")
     out.append(f"<h3>Findings ({len(fmu.findings)})</h3>")
     if fmu.findings:
         out += [_finding(f, catalogue) for f in fmu.findings]

@@ -47,6 +47,7 @@ def fmu_dict(fmu: FmuReport) -> dict[str, Any]:
         "findings": [finding_dict(f) for f in fmu.findings],
         "rules_run": list(fmu.rules_run),
         "rules_skipped": [{"code": c, "reason": r} for c, r in fmu.rules_skipped],
+        "rules_not_run": [{"code": c, "reason": r} for c, r in fmu.rules_not_run],
     }
 
 

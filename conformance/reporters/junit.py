@@ -72,9 +72,11 @@ def cases(fmu: FmuReport, catalogue: Catalogue | None = None) -> list[_Case]:
         by_code.setdefault(finding.code, []).append(finding)
     applied = set(fmu.rules_run) | set(by_code)
     reasons: dict[str, list[str]] = {}
+    failed = set(fmu.rules_not_run)
     for code, reason in fmu.rules_skipped:
         if code not in applied:
-            reasons.setdefault(code, []).append(reason)
+            shown = f"not run: {reason}" if (code, reason) in failed else reason
+            reasons.setdefault(code, []).append(shown)
     out = []
     for code in sorted(applied | set(reasons)):
         findings = tuple(by_code.get(code, ()))

@@ -135,6 +135,12 @@ def _details(fmu: FmuReport, catalogue: Catalogue | None) -> tuple[list[str], li
     head += ["; ".join(facts) + ".", ""]
     if fmu.binary_not_checked:
         head += [f"**Binary not checked:** {text(fmu.binary_not_checked)}.", ""]
+    if fmu.rules_not_run:
+        head += [f"**Not run ({len(fmu.rules_not_run)}):**", ""]
+        head += [f"- {code(c)}: {text(r)}" for c, r in fmu.rules_not_run[:20]]
+        head += [f"- … {len(fmu.rules_not_run) - 20} more in the JSON report"
+                 ] if len(fmu.rules_not_run) > 20 else []
+        head.append("")
     if not fmu.findings:
         head += ["No findings.", ""]
     lines: list[str] = []

@@ -288,6 +288,10 @@ def _invocation(report: Report) -> dict[str, Any]:
                                               f"{fmu.binary_not_checked}"}}
         for fmu in report.fmus if fmu.binary_not_checked]
     notifications += [
+        {"level": "warning", "message": {"text": f"{fmu.path}: {code} not run: {reason}"},
+         "descriptor": {"id": code}}
+        for fmu in report.fmus for code, reason in fmu.rules_not_run]
+    notifications += [
         {"level": "error", "message": {"text": f"{path}: not checked, the run was interrupted"}}
         for path in report.not_checked]
     if notifications:

@@ -1,19 +1,41 @@
 """The FMI call in progress, in a small buffer shared between the worker and its supervisor."""
 from __future__ import annotations
 
-from typing import Any
+import struct
+from typing import Any, NamedTuple
+
+_COUNT = struct.Struct("<Q")
+
+
+class CallCounts(NamedTuple):
+    """How many FMI calls the worker's library had started (the one in progress included),
+    and how many it had started when the current probe began."""
+
+    started: int
+    probe_start: int
+
+    def completed(self, in_progress: bool) -> int:
+        """FMI calls that had returned: the call in progress is not one of them."""
+        return max(0, self.started - (1 if in_progress else 0))
+
+    def completed_in_probe(self, in_progress: bool) -> int:
+        return max(0, self.completed(in_progress) - self.probe_start)
 
 
 class CallRecord:
     """The probe running and the FMI call in progress, in a small shared buffer.
 
-    The worker writes it before and after every FMI call (two slice assignments); the runner
+    The worker writes it before and after every FMI call (a few slice assignments); the runner
     reads the same bytes from the file after the worker died or was killed. Layout: probe code
-    (32 bytes), call name (64 bytes), one byte that is 1 while the call is in progress.
+    (32 bytes), call name (64 bytes), one byte that is 1 while the call is in progress; at 104
+    the number of FMI calls the library has started (the call in progress included, written
+    before the call), at 112 that number when the probe began (both unsigned 64-bit, little
+    endian).
     """
 
     SIZE = 128
     _PROBE, _CALL, _FLAG = slice(0, 32), slice(32, 96), 96
+    _STARTED, _PROBE_START = slice(104, 112), slice(112, 120)
 
     def __init__(self, buffer: Any | None = None):
         self.buffer = buffer if buffer is not None else bytearray(self.SIZE)
@@ -22,9 +44,13 @@ class CallRecord:
         self.buffer[self._PROBE] = probe.encode()[:32].ljust(32, b"\0")
         self.buffer[self._CALL] = bytes(64)
         self.buffer[self._FLAG] = 0
+        self.buffer[self._PROBE_START] = bytes(self.buffer[self._STARTED])
 
-    def enter(self, call: str) -> None:
+    def enter(self, call: str, count: int | None = None) -> None:
+        """``call`` is about to be made; ``count`` is its number among the library's calls."""
         self.buffer[self._CALL] = call.encode()[:64].ljust(64, b"\0")
+        if count is not None:
+            self.buffer[self._STARTED] = _COUNT.pack(count)
         self.buffer[self._FLAG] = 1
 
     def leave(self) -> None:
@@ -39,3 +65,10 @@ class CallRecord:
             return part.split(b"\0", 1)[0].decode("ascii", "replace")
 
         return text(data[cls._PROBE]), text(data[cls._CALL]), data[cls._FLAG] == 1
+
+    @classmethod
+    def counts(cls, data: bytes) -> CallCounts:
+        """The call counters of ``data`` (zeros for a short or empty buffer)."""
+        data = bytes(data).ljust(cls.SIZE, b"\0")
+        return CallCounts(_COUNT.unpack(data[cls._STARTED])[0],
+                          _COUNT.unpack(data[cls._PROBE_START])[0])

@@ -72,6 +72,7 @@ class Instance:
         self.started = ""
         self.calls = 0
         self.initialised = False
+        self.initializing = False    # in Initialization Mode, where fmi3Terminate is not allowed
         self._callback = fmi3LogMessageCallback(library.logger(name))  # kept alive here
         fmu = library.fmu
         self.component = self._fmi(
@@ -99,9 +100,11 @@ class Instance:
     def enter_initialization_mode(self, start_time: float) -> None:
         self._fmi("fmi3EnterInitializationMode", False, 0.0, start_time, False, 0.0)
         self.initialised = True
+        self.initializing = True
 
     def exit_initialization_mode(self) -> None:
         self._fmi("fmi3ExitInitializationMode")
+        self.initializing = False
 
     def update_discrete_states(self) -> None:
         """fmi3UpdateDiscreteStates until no further update is needed (at most 10 times)."""
@@ -119,12 +122,24 @@ class Instance:
     def enter_event_mode(self) -> None:
         self._fmi("fmi3EnterEventMode")
 
+    def reset(self) -> None:
+        """fmi3Reset: back to Instantiated, start values included (MV-23, DAE-11)."""
+        self._fmi("fmi3Reset")
+        self.initialised = False
+        self.mode = "ode"
+
     def free(self) -> None:
-        """Terminate (if initialised) and free the instance; errors here are ignored."""
+        """Terminate (if initialised, and not still in Initialization Mode, where FMI 3.0 does not
+        list fmi3Terminate) and free the instance; errors here are ignored."""
         if not self.component:
             return
+        if self.library.fatal:  # after fmi3Fatal no function may be called at all (SM-04)
+            self.component = None
+            if self in self.library.instances:
+                self.library.instances.remove(self)
+            return
         try:
-            if self.initialised:
+            if self.initialised and not self.initializing:
                 self._fmi("fmi3Terminate")
         except FmiError:
             pass

@@ -2,9 +2,10 @@
 
 Every FMI call made through a :class:`Library` goes through one choke point, ``_call``, which
 
-* writes the name of the call into the shared :class:`~conformance.runtime.callrecord.CallRecord`
-  *before* calling, so that the supervisor can name the call in progress when the process
-  crashes, hangs or runs out of memory;
+* writes the name of the call and its number among the library's calls into the shared
+  :class:`~conformance.runtime.callrecord.CallRecord` *before* calling, so that the supervisor
+  can name the call in progress, and say after how many calls, when the process crashes, hangs
+  or runs out of memory;
 * counts the call;
 * turns fmi3Discard, fmi3Error and fmi3Fatal into :class:`~conformance.runtime.errors.FmiError`
   carrying the messages the FMU logged during that call.
@@ -48,7 +49,7 @@ def _recording_class() -> Any:
                     raise Unavailable(f"{fname} is not called again: it did not return in an "
                                        "earlier probe (binary-timed-out)")
                 del self.lsdae_log[:]  # the log holds the messages of the last call only
-                self.lsdae_record.enter(fname)
+                self.lsdae_record.enter(fname, self.lsdae_calls + 1)
                 result = function(*args)
                 self.lsdae_record.leave()
                 self.lsdae_calls += 1
@@ -85,6 +86,7 @@ class Library:
         resources = os.path.join(directory, "resources")
         self.resource_path = resources + os.sep if os.path.isdir(resources) else None
         self._count = 0
+        self._init_count = 0
 
     @property
     def calls(self) -> int:
@@ -108,6 +110,12 @@ class Library:
     def next_name(self, mode: str) -> str:
         self._count += 1
         return f"lsdae-{mode}-{self._count}"
+
+    def next_initialization_name(self, mode: str) -> str:
+        """The name of an instance left in Initialization Mode (modes.start_initialization),
+        numbered apart: the many of them never rename the other instances in the reports."""
+        self._init_count += 1
+        return f"lsdae-init-{mode}-{self._init_count}"
 
     def free_all(self) -> None:
         for inst in list(self.instances):

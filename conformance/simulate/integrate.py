@@ -14,6 +14,7 @@ import numpy as np
 from ..numerics.dae import integrate_dae
 from ..numerics.ode import integrate_ode
 from ..numerics.settings import Settings, Trajectory
+from ..runtime.errors import FmiError
 from ..runtime.instance import Instance
 from ..runtime.layout import Layout
 from .system import FmuDae, FmuOde
@@ -26,8 +27,40 @@ def simulate_instance(inst: Instance, layout: Layout, settings: Settings, *, sta
     if inst.mode == "dae":
         system = FmuDae(inst, layout, manifest)
         y0 = inst.get_float64([*system.states, *system.algebraic])
-        return integrate_dae(system, settings, t0=start, y0=y0, stop=stop)
+        traj = integrate_dae(system, settings, t0=start, y0=y0, stop=stop)
+        traj.residual_along = residual_along(inst, layout, traj)
+        return traj
     ode = FmuOde(inst, layout, model)
     nominal = np.array([layout.scale(vr) for vr in ode.algebraic])
     return integrate_ode(ode, settings, t0=start, x0=inst.get_float64(ode.states), stop=stop,
                          algebraic_nominal=nominal)
+
+
+def residual_along(inst: Instance, layout: Layout, traj: Trajectory) -> dict[str, Any]:
+    """The largest |residual| at the output times of a DAE-mode run: how well the run kept
+    0 = g(x, w) (``{}`` when there are no residuals, or the FMU cannot be evaluated again).
+    Evaluated after the run, so the run's own counts stay as they were."""
+    residuals = list(layout.residuals)
+    index = {name: k for k, name in enumerate(traj.names)}
+    states = [index.get(layout.name(vr)) for vr in layout.states]
+    algebraic = [index.get(layout.name(vr)) for vr in layout.algebraic]
+    if not residuals or None in states or None in algebraic or not traj.times:
+        return {}
+    worst: dict[str, Any] = {}
+    try:
+        for row, t in enumerate(traj.times):
+            values = traj.values[row]
+            if not np.all(np.isfinite(values)):
+                continue
+            inst.set_time(t)
+            if states:
+                inst.set_states([values[k] for k in states])
+            inst.set_float64(list(layout.algebraic), [values[k] for k in algebraic])
+            g = np.abs(inst.get_float64(residuals))
+            k = int(np.argmax(g))
+            if not worst or g[k] > worst["max_abs"]:
+                worst = {"max_abs": float(g[k]), "residual": layout.name(residuals[k]),
+                         "t": float(t)}
+    except FmiError:
+        return worst
+    return worst

@@ -42,10 +42,22 @@
  *   DEFECT_FATAL_DIRECTIONAL       fmi3GetDirectionalDerivative returns fmi3Fatal
  *   DEFECT_WRONG_ADJOINT           the adjoint alone doubles d(res[0])/d(w[0]) (DAE mode)
  *   DEFECT_ODE_DAE_INCONSISTENT    ODE mode solves g = 0.05 instead of g = 0
+ *   DEFECT_RESET_KEEPS_SWITCH      fmi3Reset keeps the DAE switch and the first state
+ *   DEFECT_INITIAL_UNDECLARED      Initialization Mode: y[0] also depends on x[NX-1] (its value
+ *                                  and its derivatives agree; the XML does not say so)
+ *   DEFECT_INITIAL_DIRECTIONAL     Initialization Mode, DAE mode: the directional derivative of
+ *                                  w drops the sign of -(dg/dw)^-1 dg/dk
  * and for the simulation probes (tests/fixtures/defects/simulation.py), only for t > 0.5:
  *   DEFECT_LATE_JUMP               res[0] jumps by 1 (no event indicator)
  *   DEFECT_LATE_FAST               der[0] gains 1e5 cos(1e5 t)
  *   DEFECT_LATE_ODE_DRIFT          ODE mode solves g = 0.05 instead of g = 0
+ * and for the endurance probes (tests/fixtures/defects/endurance.py), only with sustained use:
+ *   DEFECT_LATE_CRASH              Continuous-Time Mode: the 5001st FMI call on an instance crashes
+ *   DEFECT_LATE_ERROR              Continuous-Time Mode: every FMI call after the 5000th on an
+ *                                  instance returns fmi3Error
+ *   DEFECT_LEAK                    fmi3GetFloat64 keeps 1 KiB on every call, never freed
+ *   DEFECT_GLOBAL_STATE            the states x live in one C global shared by every instance
+ *   DEFECT_STALE_STATES            a new instance starts from the states of the last one freed
  */
 #include <math.h>
 #include <stdarg.h>
@@ -143,6 +155,7 @@ typedef struct {
     int nblocks, alloc_failed;
 
     char *name;
+    unsigned long ncalls;              /* FMI calls on this instance (DEFECT_LATE_*) */
     fmi3InstanceEnvironment env;
     fmi3LogMessageCallback  logger;
     fmi3Boolean logging;
@@ -188,12 +201,40 @@ static fmi3Status discarded(Instance *c) {
 
 #define FAIL(...) do { logmsg(c, fmi3Error, __VA_ARGS__); return fmi3Error; } while (0)
 
+/* The defects that need sustained use: they strike after LATE_AFTER calls on one instance. */
+#define LATE_AFTER 5000UL
+#if defined(DEFECT_LATE_CRASH)
+#define LATE(fn)                                                               \
+    if (++c->ncalls > LATE_AFTER && c->d.state == ContinuousTimeMode) {        \
+        double *volatile gone = NULL;   /* a work buffer released too early */ \
+        c->d.t = *gone;                                                        \
+    }
+#elif defined(DEFECT_LATE_ERROR)
+#define LATE(fn)                                                               \
+    if (++c->ncalls > LATE_AFTER && c->d.state == ContinuousTimeMode)          \
+        FAIL("%s: work buffer exhausted after %lu calls", fn, LATE_AFTER)
+#else
+#define LATE(fn)
+#endif
+
 /* Declares `c`, checks the instance pointer and the state mask. */
 #define BEGIN(fn, mask)                                                        \
     Instance *c = (Instance *)instance;                                        \
     if (!c) return fmi3Error;                                                  \
+    LATE(fn);                                                                  \
     if (!(c->d.state & (mask)))                                                \
         FAIL("%s: not allowed in %s", fn, state_name(c->d.state))
+
+#ifdef DEFECT_LEAK
+static void *leaked;                   /* a result cache that only grows */
+#endif
+#ifdef DEFECT_GLOBAL_STATE
+static double global_x[NMAX];          /* generated code's one state vector for every instance */
+#endif
+#ifdef DEFECT_STALE_STATES
+static double stale_x[NMAX];           /* a static state vector, set only when the library loads */
+static int have_stale;
+#endif
 
 /* A zeroed heap block owned by the instance (freed with it); NULL once one failed. */
 static void *grab(Instance *c, size_t n, size_t size) {
@@ -632,7 +673,15 @@ static fmi3Status partial_derivatives(fmi3Instance instance, const char *fn, int
         directional(c, total);
         for (i = 0; i < nU; i++) {
             int r = unknown_row(c, unknowns[i]);
+#ifdef DEFECT_INITIAL_DIRECTIONAL
+            sens[i] = r < NROWS ? c->v[r] : c->z[r - NROWS];
+#else
             sens[i] = r < NROWS ? c->v[r] : -c->z[r - NROWS];
+#endif
+#ifdef DEFECT_INITIAL_UNDECLARED
+            if (c->d.state == InitializationMode && NX > 0 && NY > 0 && r == NX + NW)
+                sens[i] += 0.25 * c->s[NX - 1];
+#endif
         }
     } else {
         memset(c->a, 0, sizeof(double) * (size_t)NROWS);
@@ -644,6 +693,11 @@ static fmi3Status partial_derivatives(fmi3Instance instance, const char *fn, int
         }
         adjoint(c, total);
         for (j = 0; j < nK; j++) sens[j] = c->p[known_col(c, knowns[j])];
+#ifdef DEFECT_INITIAL_UNDECLARED
+        if (c->d.state == InitializationMode && NX > 0 && NY > 0)
+            for (j = 0; j < nK; j++)
+                if (known_col(c, knowns[j]) == NX - 1) sens[j] += 0.25 * c->a[NX + NW];
+#endif
     }
     return fmi3OK;
 }
@@ -848,6 +902,9 @@ static int allocate(Instance *c) {
     c->der = c->u + NU;
     c->res = c->der + NX;
     c->y = c->res + NW;
+#ifdef DEFECT_GLOBAL_STATE
+    c->x = global_x;
+#endif
     build_index(c);
     c->pval = (double *)grab(c, (size_t)c->nnz, sizeof(double));
     c->ab = (double *)grab(c, nw * (size_t)c->bw, sizeof(double));
@@ -936,6 +993,9 @@ fmi3Instance fmi3InstantiateModelExchange(fmi3String instanceName, fmi3String in
         return NULL;
     }
     reset_data(c);
+#ifdef DEFECT_STALE_STATES
+    if (have_stale) memcpy(c->x, stale_x, sizeof(double) * (size_t)NX);
+#endif
     return c;
 }
 
@@ -970,6 +1030,12 @@ void fmi3FreeInstance(fmi3Instance instance) {
     Instance *c = (Instance *)instance;
     int k;
     if (!c) return;
+#ifdef DEFECT_STALE_STATES
+    if (c->x) {
+        memcpy(stale_x, c->x, sizeof(double) * (size_t)NX);
+        have_stale = 1;
+    }
+#endif
     for (k = 0; k < c->nblocks; k++) free(c->blocks[k]);
     free(c->name);
     free(c);
@@ -1017,6 +1083,16 @@ fmi3Status fmi3Terminate(fmi3Instance instance) {
 
 fmi3Status fmi3Reset(fmi3Instance instance) {
     BEGIN("fmi3Reset", ANY_STATE);
+#ifdef DEFECT_RESET_KEEPS_SWITCH
+    {   /* the DAE switch and the first state survive the reset */
+        fmi3Boolean dae = c->d.dae;
+        double x0 = NX > 0 ? c->x[0] : 0.0;
+        reset_data(c);
+        c->d.dae = dae;
+        if (NX > 0) c->x[0] = x0;
+        return fmi3OK;
+    }
+#endif
     reset_data(c);
     return fmi3OK;
 }
@@ -1053,6 +1129,16 @@ fmi3Status fmi3GetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], 
     int idx, computed = 0;
     fmi3Status status;
     BEGIN("fmi3GetFloat64", ANY_STATE);
+#ifdef DEFECT_LEAK
+    {
+        void **block = (void **)malloc(1024);
+        if (block) {
+            memset(block, 1, 1024);
+            block[0] = leaked;
+            leaked = block;
+        }
+    }
+#endif
     if (nvr != nValues) FAIL("fmi3GetFloat64: nValues != nValueReferences");
     if (nvr && (!vr || !values)) FAIL("fmi3GetFloat64: NULL argument");
     for (k = 0; k < nvr; k++) {
@@ -1074,6 +1160,11 @@ fmi3Status fmi3GetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], 
     for (k = 0; k < nvr; k++) {
         int kind = lookup(c, vr[k], &idx);
         values[k] = *slot(c, kind, idx);
+#ifdef DEFECT_INITIAL_UNDECLARED
+        /* only as read in Initialization Mode: the stored y[0] is untouched */
+        if (kind == K_Y && idx == 0 && c->d.state == InitializationMode && NX > 0)
+            values[k] += 0.25 * c->x[NX - 1];
+#endif
     }
     return fmi3OK;
 }

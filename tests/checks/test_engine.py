@@ -10,6 +10,7 @@ from conformance.catalogue import Catalogue, default_catalogue
 from conformance.checks import REGISTRY
 from conformance.engine import EngineOptions, check_fmu
 from conformance.findings import Severity, Violation
+from conformance.layer import NOT_A_DAE_FMU
 from tests.fixturekit import Case, materialise, zip_scene
 
 
@@ -38,7 +39,7 @@ def test_missing_manifest_skips_dae_rules_not_fails(tmp_path):
     report = check_fmu(_scene(tmp_path, remove=["manifest"]), options=EngineOptions(probes=False))
     assert {f.code for f in report.findings} == {"DAE091"}
     assert report.rules_skipped, "DAE rules should be listed as skipped"
-    assert all(reason == "no manifest" for _, reason in report.rules_skipped)
+    assert all(reason == NOT_A_DAE_FMU for _, reason in report.rules_skipped)
 
 
 def test_grouping_many_identical_violations(tmp_path, monkeypatch):
@@ -123,3 +124,37 @@ def test_a_file_left_out_by_an_archive_limit_is_not_read_not_missing(tmp_path):
     assert info["modelDescription"] == "not read because of archive-too-large"
     reasons = dict(report.rules_skipped)
     assert reasons["DAE501"] == "modelDescription.xml not read because of archive-too-large"
+
+
+def test_a_reader_that_fails_never_calls_a_present_manifest_absent(tmp_path, monkeypatch):
+    """When lsdae itself fails before the manifest is read, the summary says the manifest is
+    there and not checked, and the console never says "no fmi-ls-dae manifest"."""
+    from conformance.findings import Report
+    from conformance.reporters import console
+
+    def broken(*_args, **_kwargs):
+        raise RecursionError("deep")
+
+    monkeypatch.setattr(engine, "detect_draft", broken)  # fails before the draft is known
+    report = check_fmu(_scene(tmp_path), options=EngineOptions(probes=False))
+    assert "internal-error" in {f.name for f in report.findings}
+    assert dict(report.info)["manifest"].startswith("present, not checked")
+    text = console.render(Report(tool_version="1", fmus=(report,)))
+    assert "no fmi-ls-dae manifest" not in text
+
+
+def test_an_fmi2_fmu_is_one_warning_and_not_checked(tmp_path, capsys):
+    """An FMI 2.0 FMU: fmi-version-unsupported once, no schema noise, every other rule skipped
+    with the reason, exit 0 under the default --fail-on, and "not checked" in the summary."""
+    from conformance.cli import main
+    from tests.fixturekit import all_cases
+
+    case = next(c for c in all_cases() if c.id == "DAE092/fail")
+    path = materialise(case, tmp_path)
+    report = check_fmu(path, options=EngineOptions(probes=True))
+    assert [f.name for f in report.findings] == ["fmi-version-unsupported"]
+    assert report.not_checked and not report.rules_run
+    assert {reason for _, reason in report.rules_skipped} == {report.not_checked}
+    assert main(["check", str(path), "--color", "never"]) == 0
+    out = capsys.readouterr().out
+    assert "not checked" in out and "schema-violation" not in out

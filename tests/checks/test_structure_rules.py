@@ -1,7 +1,6 @@
 """Unit tests of the DAE model-structure rules (DAE420-DAE426) and index 1 (DAE601)."""
 from __future__ import annotations
 
-import time
 
 import pytest
 from lxml import etree
@@ -452,15 +451,12 @@ def _chain(m: int, *, broken: int | None = None) -> CheckContext:
     return CheckContext(md, manifest, "alpha1")
 
 
-def test_index1_large_chain_is_fast():
+def test_index1_large_chain():
+    # speed is measured by `make bench` (reports/bench/static.md), never by a timed test
     ctx = _chain(25_000)
-    start = time.perf_counter()
     assert _run("DAE601", ctx) == []
-    assert time.perf_counter() - start < 0.5
     ctx = _chain(25_000, broken=12_500)
-    start = time.perf_counter()
     found = _run("DAE601", ctx)
-    assert time.perf_counter() - start < 0.5
     ev = _dm(found)
     # r[12500] depends on w[12499] only: r[0..12500] (12501 residuals) hold w[0..12499]
     assert ev["structural_rank"] == 24_999

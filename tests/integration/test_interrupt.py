@@ -48,7 +48,7 @@ def test_ctrl_c_writes_the_finished_reports_and_exits_within_a_second(tmp_path, 
         cwd=tmp_path, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
         start_new_session=True)
     try:
-        time.sleep(6.0)  # the clean FMU is done, the hanging one waits for its time limit
+        time.sleep(8.0)  # the clean FMU is done, the hanging one waits for its 20 s limit
         assert proc.poll() is None, "the run ended before it could be interrupted"
         sent = time.monotonic()
         os.killpg(proc.pid, signal.SIGINT)  # what a terminal sends on Ctrl-C
@@ -58,7 +58,7 @@ def test_ctrl_c_writes_the_finished_reports_and_exits_within_a_second(tmp_path, 
         if proc.poll() is None:
             os.killpg(proc.pid, signal.SIGKILL)
     assert proc.returncode == 130, stderr.decode()
-    assert took < 1.5, f"exit took {took:.2f} s after Ctrl-C"
+    assert took < 2.0, f"exit took {took:.2f} s after Ctrl-C"  # ~0.3 s; room for a busy CI
     data = json.loads(out.read_text())
     assert [f["path"] for f in data["fmus"]] == [str(clean)]
     assert data["interrupted"]["not_checked"] == [str(hanging), str(hanging)]

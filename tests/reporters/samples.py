@@ -26,6 +26,7 @@ from conformance.findings import (
     Severity,
     evidence,
 )
+from conformance.layer import NOT_A_DAE_FMU
 from tests.fixturekit import all_cases, materialise
 
 HERE = Path(__file__).resolve().parent
@@ -101,11 +102,12 @@ def sample_report() -> Report:
     plain = FmuReport(
         path="models/unpacked/Plain", draft=None,
         findings=(_f("DAE091", "manifest-missing", Severity.INFO,
-                     f"no {MANIFEST}: an ordinary Model Exchange FMU", MANIFEST),),
+                     f"no fmi-ls-dae manifest ({MANIFEST}): a Model Exchange FMU that does "
+                     "not use the DAE layer; the DAE rules are skipped", MANIFEST),),
         rules_run=(),
-        rules_skipped=(("DAE201", "no manifest"), ("DAE301", "no manifest"),
-                       ("DAE701", "no manifest")),
-        info=evidence(model_name="Plain", probes="not run: no manifest"),
+        rules_skipped=(("DAE201", NOT_A_DAE_FMU), ("DAE301", NOT_A_DAE_FMU),
+                       ("DAE701", NOT_A_DAE_FMU)),
+        info=evidence(model_name="Plain", probes=f"not run: {NOT_A_DAE_FMU}"),
     )
     crashy = FmuReport(
         path="models/Crashy.fmu", draft="alpha1",
@@ -117,6 +119,8 @@ def sample_report() -> Report:
                1, evidence(signal="SIGSEGV", call="fmi3GetFloat64")),
         ),
         rules_run=("DAE201", "DAE701"),
+        rules_skipped=(("DAE720", "the worker failed before the probes could run"),),
+        rules_not_run=(("DAE720", "the worker failed before the probes could run"),),
     )
     clean = FmuReport(path="models/Clean.fmu", draft="alpha1", findings=(),
                       rules_run=("DAE201", "DAE203", "DAE301", "DAE701"))

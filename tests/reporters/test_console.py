@@ -1,9 +1,17 @@
 """Console output: compiler-style diagnostics; measured findings show their numbers."""
 from __future__ import annotations
 
+import shutil
+import zipfile
+
+import pytest
+
 from conformance.catalogue import default_catalogue
+from conformance.engine import EngineOptions, check_paths
 from conformance.findings import Finding, FmuReport, Location, Report, Severity, evidence
 from conformance.reporters.console import EVIDENCE_ITEMS, render
+from tests.reporters.samples import SAMPLE_CATALOGUE, sample_report
+from tests.scenes.test_corpus import corpus_fmu
 
 CATALOGUE = default_catalogue()
 
@@ -43,3 +51,33 @@ def test_colour_only_when_asked():
     report = _report(_finding("nan-or-inf", value=float("nan")))
     assert "\033[" not in render(report, CATALOGUE)
     assert "\033[" in render(report, CATALOGUE, color=True)
+
+
+def test_rules_that_could_not_run_are_listed_and_counted():
+    text = render(sample_report(), SAMPLE_CATALOGUE)
+    block = text[text.index("models/Crashy.fmu"):]
+    assert "not run: DAE720" in block and "the worker failed before the probes could run" in block
+    assert "1 rule not run" in block
+    assert text.rstrip().splitlines()[-1].count("1 rule not run") == 1
+# --- the manifest-missing finding is worded true for the FMU's interface types (issue 8) ------
+
+@pytest.mark.parametrize("name, kinds", [
+    ("CoSimulationOnly", "a Co-Simulation FMU"),
+    ("ScheduledExecutionOnly", "a Scheduled Execution FMU"),
+    ("ModelExchangeEvents", "a Model Exchange FMU"),
+    ("StartTime", "a Model Exchange and Co-Simulation FMU"),
+])
+def test_manifest_missing_names_the_interface_types(name, kinds):
+    text = render(check_paths([corpus_fmu(name)], options=EngineOptions(probes=False)))
+    assert f"{kinds} that does not use the DAE layer" in text
+    assert "ordinary Model Exchange" not in text
+
+
+def test_manifest_missing_names_what_declares_the_layer(tmp_path):
+    fmu = tmp_path / "Declared.fmu"
+    shutil.copyfile(corpus_fmu("CoSimulationOnly"), fmu)
+    with zipfile.ZipFile(fmu, "a") as zf:
+        zf.writestr("extra/org.fmi-standard.fmi-ls-dae/README.txt", "the manifest is coming")
+    text = render(check_paths([fmu], options=EngineOptions(probes=False)))
+    assert ("although extra/org.fmi-standard.fmi-ls-dae/README.txt declares the fmi-ls-dae "
+            "layer") in text

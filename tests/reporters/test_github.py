@@ -8,6 +8,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from conformance.findings import FmuReport, Report, Severity
+from conformance.layer import NOT_A_DAE_FMU
 from conformance.reporters import REPORTER_BY_NAME, github, json_report
 from tests.reporters.samples import SAMPLE_CATALOGUE, compare_expected, sample_report
 
@@ -72,7 +73,7 @@ def test_one_annotation_per_finding_with_file_line_and_title():
     commands = [c for c in commands if c not in groups and c not in unchecked]
     # the FMU whose probes did not run says so in a notice of its own
     assert [c.message for c in unchecked] == [
-        "models/unpacked/Plain: binary not checked: no manifest"]
+        f"models/unpacked/Plain: binary not checked: {NOT_A_DAE_FMU}"]
     findings = sorted(((fmu, f) for fmu in report.fmus for f in fmu.findings
                        if not f.evidence_dict().get("baselined")),
                       key=lambda item: -item[1].severity)  # errors first, stable otherwise

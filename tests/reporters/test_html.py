@@ -49,7 +49,8 @@ def sample_report(*, baselined: bool = True) -> Report:
         _finding("DAE104", Severity.WARNING, "the manifest's 'fmi-ls-description' differs",
                  location=Location("extra/org.fmi-standard.fmi-ls-dae/fmi-ls-manifest.xml", 2,
                                    snippet="<fmiDAEManifest"), evidence=mark),
-        _finding("DAE091", Severity.INFO, "no manifest: an ordinary Model Exchange FMU"),
+        _finding("DAE091", Severity.INFO, "no manifest: a Co-Simulation FMU that does not use "
+                 "the DAE layer"),
     )
     first = FmuReport("build/demo/Broken.fmu", "alpha1", findings, rules_run=("DAE203",),
                       info=evidence(model_name="Broken", fmi_version="3.0", variables=9,

@@ -9,6 +9,7 @@ from lxml import etree
 
 from conformance.catalogue import default_catalogue
 from conformance.findings import Report, RunInfo
+from conformance.layer import NOT_A_DAE_FMU
 from conformance.reporters import REPORTER_BY_NAME, json_report, junit
 from tests.reporters.samples import (
     ENGINE_RUN,
@@ -99,13 +100,18 @@ def test_sample_outcomes_per_rule():
     assert isinstance(skipped, Skipped) and skipped.message == "probes turned off (--no-probes)"
     # no manifest: the info finding passes, the DAE rules are skipped with the reason
     assert {c.name: (c.result[0].message if c.result else None) for c in plain} == {
-        "DAE091 manifest-missing": None, "DAE201 enable-parameter-missing": "no manifest",
-        "DAE301 algebraic-variable-unknown-vr": "no manifest",
-        "DAE701 initial-residual-nonzero": "no manifest"}
+        "DAE091 manifest-missing": None, "DAE201 enable-parameter-missing": NOT_A_DAE_FMU,
+        "DAE301 algebraic-variable-unknown-vr": NOT_A_DAE_FMU,
+        "DAE701 initial-residual-nonzero": NOT_A_DAE_FMU}
     # a crash and an internal error are errors, not failures; the rule unknown to the
     # catalogue keeps the finding's name
-    kinds = {c.name: type(c.result[0]) for c in crashy if c.result}
+    kinds = {c.name: type(c.result[0]) for c in crashy
+             if c.result and not isinstance(c.result[0], Skipped)}
     assert kinds == {"DAE099 internal-error": Error, "DAE790 binary-crashed": Error}
+    # a rule that could not run is a skipped case that says so, with the reason
+    not_run = {c.name.split()[0]: c.result[0].message for c in crashy
+               if c.result and isinstance(c.result[0], Skipped)}
+    assert not_run == {"DAE720": "not run: the worker failed before the probes could run"}
     assert all(c.is_passed for c in clean) and len(list(clean)) == 4
 
 
@@ -116,7 +122,7 @@ def test_attributes_for_jenkins_gitlab_and_ant():
     assert suite.get("timestamp") == "2026-11-21T22:28:40"  # UTC, no zone (Ant)
     assert suite.get("hostname") == "ci-runner" and suite.get("time") == "0.250"
     assert suite.get("package") == "models" and suite.get("id") == "0"
-    assert root.get("time") == "1.938" and root.get("tests") == "17"
+    assert root.get("time") == "1.938" and root.get("tests") == "18"
     case = suite.find("testcase")
     assert case.get("file") == "models/Broken.fmu"  # GitLab shows it
 

@@ -118,3 +118,28 @@ def test_usage_errors(tmp_path, capsys):
     with pytest.raises(SystemExit):
         _main([str(tmp_path / "x.fmu"), "--rtol", "-1"])
     capsys.readouterr()
+
+
+def test_start_values_of_inputs_change_the_run(tmp_path, capsys):
+    fmu = str(build_scene("SimpleDAE"))
+    base, moved = tmp_path / "base.csv", tmp_path / "moved.csv"
+    assert _main([fmu, "-o", str(base), "--color", "never"]) == 0
+    assert _main([fmu, "-o", str(moved), "--start-value", "u1=0.5", "--start-value", "u2=-0.25",
+                  "--color", "never"]) == 0
+    first, second = _rows(base), _rows(moved)
+    assert first[0] == second[0] and first[1][:3] == second[1][:3]  # same time and states x1, x2
+    assert first[-1] != second[-1], "the inputs' start values did not reach the run"
+
+
+@pytest.mark.parametrize("item", ["nope=1", "u1", "u1=fast", "x1=2"])
+def test_bad_start_values_are_usage_errors(item, capsys):
+    assert _main([str(build_scene("SimpleDAE")), "--start-value", item]) == 2
+    assert capsys.readouterr().err.startswith("lsdae: --start-value")
+
+
+def test_the_summary_gives_the_largest_residual_along_the_dae_run(tmp_path, capsys):
+    assert _main([str(build_scene("SimpleDAE")), "--color", "never"]) == 0
+    line = next(line for line in capsys.readouterr().out.splitlines()
+                if "largest residual along the run" in line)
+    value = float(line.split("largest residual along the run ")[1].split()[0])
+    assert 0 <= value < 1e-5  # IDA kept 0 = g(x, w) to within its tolerance

@@ -25,7 +25,7 @@ FLOORS: list[tuple[str, ...]] = [
     ("runtime", "precommit", "context"),
     ("fmu", "archive_source", "archive_scan", "archive_zip", "archive_folder", "archive_inventory",
      "archive_base", "schemas", "schema_loader", "schema_messages", "xmlsafe", "element_path",
-     "manifest", "reporters", "ruledocs", "baseline"),
+     "manifest", "layer", "reporters", "ruledocs", "baseline"),
     ("drafts", "catalogue", "config"),
     ("numerics", "model", "unknowns", "bipartite", "matching", "dulmage_mendelsohn", "findings",
      "paths", "progress", "attributes", "definitions", "structured_names", "__init__"),

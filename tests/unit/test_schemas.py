@@ -3,7 +3,6 @@ the schemas offline (conformance/schema_loader.py)."""
 from __future__ import annotations
 
 import socket
-import time
 from pathlib import Path
 
 import pytest
@@ -219,15 +218,12 @@ def _big_model_description(count: int, bad_at: int | None = None) -> bytes:
     return "".join(parts).encode()
 
 
-def test_model_description_large_file_is_fast_and_keeps_big_line_numbers() -> None:
+def test_model_description_large_file_keeps_big_line_numbers() -> None:
     data = _big_model_description(100_000, bad_at=90_000)
     assert len(data) > 15_000_000
     tree = etree.ElementTree(etree.fromstring(data, etree.XMLParser(huge_tree=True)))
     schema_loader.model_description_schema()  # loading is a one-off cost, not part of the budget
-    start = time.perf_counter()
-    found = list(schemas.validate_model_description(tree))
-    elapsed = time.perf_counter() - start
-    assert elapsed < 3.0, f"validation took {elapsed:.2f} s"
+    found = list(schemas.validate_model_description(tree))  # its speed: `make bench`
     (violation,) = found
     # Beyond libxml2's 16-bit line field lines come from a fallback that may land on the next
     # line; the finding must agree with the element's sourceline (what every other rule reports).

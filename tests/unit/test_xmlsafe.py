@@ -250,3 +250,23 @@ def test_entity_messages_do_not_contradict_themselves(where: str) -> None:
     _, violations = parse_xml(_laughs(9, where), file="x.xml")
     for v in violations:
         assert not ("never expanded" in v.message and "expanding them" in v.message)
+
+
+def test_an_undeclared_fmi_ls_prefix_is_reported_and_then_read_as_importers_do() -> None:
+    data = (b'<?xml version="1.0" encoding="UTF-8"?>\n<fmiDAEManifest\n'
+            b'  fmi-ls:fmi-ls-version="1.0.0-alpha.1">\n  <AlgebraicVariables/>\n'
+            b'</fmiDAEManifest>\n')
+    tree, violations = parse_xml(data, file="m.xml")
+    assert tree is None and rules_of(violations) == {"xml-not-well-formed"}
+    tree, violations = parse_xml(data, file="m.xml", bind_prefixes=True)
+    assert tree is not None and rules_of(violations) == {"xml-not-well-formed"}
+    root = tree.getroot()
+    assert root.get("{http://fmi-standard.org/fmi-ls-manifest}fmi-ls-version") == "1.0.0-alpha.1"
+    assert root[0].sourceline == 4  # line numbers stay as they were
+    assert "read_as_importers_do" in dict(violations[0].evidence)
+
+
+def test_an_unknown_undeclared_prefix_is_not_guessed() -> None:
+    data = b'<root foo:a="1"/>'
+    tree, violations = parse_xml(data, file="m.xml", bind_prefixes=True)
+    assert tree is None and rules_of(violations) == {"xml-not-well-formed"}

@@ -1,0 +1,72 @@
+"""Sustained growth of a quantity sampled along a run: resident memory against FMI calls.
+
+A leak grows the resident set by about the same amount on every call, for as long as the run
+lasts. Everything else that moves it is bounded: the allocator takes memory in steps (a page, an
+arena, a top-up of the heap), and caches and warm-up allocations grow early and then stop. So
+the growth is measured where a bounded effect has settled and a leak has not:
+
+* only the second half of the samples counts (warm-up is over);
+* its least-squares slope, in units of y per unit of x, and the growth that slope makes across
+  the second half are both reported, so the rule can require a rate and a total;
+* the third and fourth quarters are fitted on their own as well: a single step of the allocator
+  lands in one of them, a leak raises both.
+
+Plain functions of arrays, like the rest of ``numerics``; the rule compares with its thresholds.
+"""
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+MIN_SAMPLES = 8    # fewer samples than this in the run: no judgement
+
+
+@dataclass(frozen=True)
+class Growth:
+    """The growth of y with x over the second half of a run.
+
+    ``slope``: least-squares dy/dx over the second half; ``total``: ``slope`` times the span of
+    x there; ``quarters``: the slopes of the third and of the fourth quarter, each fitted alone;
+    ``rise``: the last y minus the first y of the second half; ``samples``: how many samples
+    the second half holds.
+    """
+
+    slope: float
+    total: float
+    quarters: tuple[float, float]
+    rise: float
+    samples: int
+
+    @property
+    def sustained_slope(self) -> float:
+        """The smallest of the three slopes: what the run shows at least everywhere late."""
+        return min(self.slope, *self.quarters)
+
+
+def _slope(x: np.ndarray, y: np.ndarray) -> float:
+    """Least-squares slope of y on x (0 when x does not vary)."""
+    dx = x - x.mean()
+    denominator = float(dx @ dx)
+    return float(dx @ (y - y.mean())) / denominator if denominator > 0 else 0.0
+
+
+def growth(x: Sequence[float], y: Sequence[float]) -> Growth | None:
+    """The growth of ``y`` with ``x`` (both of length n, x increasing), or None when there are
+    fewer than ``MIN_SAMPLES`` samples."""
+    xs = np.asarray(x, dtype=float)
+    ys = np.asarray(y, dtype=float)
+    n = min(len(xs), len(ys))
+    if n < MIN_SAMPLES:
+        return None
+    xs, ys = xs[:n], ys[:n]
+    half = n // 2
+    late_x, late_y = xs[half:], ys[half:]
+    quarter = half + (n - half) // 2
+    slope = _slope(late_x, late_y)
+    return Growth(
+        slope=slope, total=slope * float(late_x[-1] - late_x[0]),
+        quarters=(_slope(xs[half:quarter + 1], ys[half:quarter + 1]),
+                  _slope(xs[quarter:], ys[quarter:])),
+        rise=float(late_y[-1] - late_y[0]), samples=n - half)

@@ -1,0 +1,159 @@
+"""The Jacobian of Initialization Mode as the InitialUnknown probes see it: rows, columns and
+declared sparsity (for :mod:`.initial_survey`).
+
+**Which list.** In DAE mode the manifest's ``<InitialUnknown>`` elements replace the
+modelDescription's (DAE-30): they are verified on DAE-mode instances. When the manifest lists
+none, whether the modelDescription's list is inherited in DAE mode is open (Q-02), so that list
+is verified where it surely applies: in ODE mode (DAE-11), if the FMU has one.
+
+**Rows** are the scalar Float64 InitialUnknowns of that list. **Columns** are the knowns of
+Initialization Mode that can be set as start values (MS-11, SG-01): scalar Float64 inputs and
+variables with ``initial="exact"`` (parameters, states with an exact start, ...; never constants
+or structural parameters), each with one finite XML start value, and the independent variable,
+moved through the ``startTime`` of fmi3EnterInitializationMode and never below the
+``<DefaultExperiment>`` start. Algebraic variables with ``initial="approx"`` are not perturbed:
+their start values are guesses (Q-05), and a solution that depends on its guess is no
+dependency. Nominal values and bounds are those of the runtime layout.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..findings import Location
+from ..model import ModelDescription, Unknown, Variable
+from ..numerics import colouring as col
+from ..runtime.layout import Layout
+from .api import ProbeContext
+from .jacobian_layout import Column, JacobianLayout, Row
+
+
+def _number(text: str | None) -> float | None:
+    """One finite number, or None (several tokens: an array start)."""
+    tokens = (text or "").split()
+    if len(tokens) != 1:
+        return None
+    try:
+        value = float(tokens[0])
+    except ValueError:
+        return None
+    return value if math.isfinite(value) else None
+
+
+def _scalar_float64(model: ModelDescription, vr: int | None) -> Variable | None:
+    var = model.by_vr.get(vr) if vr is not None else None
+    return var if var is not None and var.type == "Float64" and not var.dimensions else None
+
+
+def _role(var: Variable, states: set[int]) -> str | None:
+    """The known's role in Initialization Mode, or None if it is no known that can be set."""
+    if var.variability == "constant" or var.causality in ("independent", "structuralParameter"):
+        return None
+    if var.causality == "input":
+        return "input"
+    if var.initial != "exact":
+        return None
+    if var.causality == "parameter":
+        return "parameter"
+    return "state" if var.vr in states else "exact"
+
+
+def start_time(model: ModelDescription, layout: Layout) -> float:
+    """The ``<DefaultExperiment>`` start time when it is a finite number, else the layout's."""
+    experiment = model.default_experiment
+    value = experiment.start_time if experiment is not None else None
+    return float(value) if value is not None and math.isfinite(value) else layout.start_time
+
+
+def choose_list(ctx: ProbeContext, layout: Layout) -> tuple[str, list[Unknown], str]:
+    """(mode, the InitialUnknown elements to verify, the reason when there are none)."""
+    listed = list(ctx.manifest.unknowns("InitialUnknown")) if ctx.manifest else []
+    if listed:
+        return "dae", listed, ""
+    core = list(ctx.model.unknowns("InitialUnknown"))
+    if not core:
+        return "dae", [], "neither the manifest nor the modelDescription lists an InitialUnknown"
+    if layout.enable_status != "ok":
+        return "dae", [], (
+            "the manifest lists no InitialUnknown, and the FMU has no ODE mode in which the "
+            "modelDescription's list surely applies (whether DAE mode inherits it is open, Q-02)")
+    return "ode", core, ""
+
+
+def build_initial_layout(ctx: ProbeContext, layout: Layout
+                         ) -> tuple[JacobianLayout | None, str, dict[int, float], str]:
+    """(the Jacobian layout of Initialization Mode, the mode, the start value of each known
+    that is not time, the reason when there is no layout)."""
+    model = ctx.model
+    if model is None:
+        return None, "dae", {}, "no model description"
+    mode, unknowns, reason = choose_list(ctx, layout)
+    if not unknowns:
+        return None, mode, {}, reason
+    states = set(layout.states_for(mode))
+    cols: list[Column] = []
+    start: dict[int, float] = {}
+    for var in model.variables:
+        if _scalar_float64(model, var.vr) is None or var.vr in start:
+            continue
+        role, value = _role(var, states), _number(var.start)
+        if role is None or value is None:
+            continue
+        vr: int = var.vr  # type: ignore[assignment]
+        lo, hi = layout.bounds.get(vr, (-math.inf, math.inf))
+        cols.append(Column(vr, var.name, role, layout.scale(vr), lo, hi))
+        start[vr] = min(max(value, lo), hi) if lo <= hi else value
+    independent = [v for v in model.variables if v.causality == "independent"]
+    if independent and _scalar_float64(model, independent[0].vr) is not None:
+        time = independent[0]
+        cols.append(Column(time.vr, time.name, "time", 1.0,  # type: ignore[arg-type]
+                           start_time(model, layout), math.inf))
+    rows = _rows(model, unknowns, {c.vr for c in cols})
+    if not rows or not cols:
+        return None, mode, {}, ("no scalar Float64 InitialUnknown, or no known that can be set "
+                                "in Initialization Mode, to differentiate")
+    return _with_pattern(rows, cols), mode, start, ""
+
+
+def _rows(model: ModelDescription, unknowns: list[Unknown], knowns: set[int]
+          ) -> list[tuple[Row, Unknown]]:
+    out: list[tuple[Row, Unknown]] = []
+    taken: set[int] = set()
+    for u in unknowns:
+        var = _scalar_float64(model, u.vr)
+        if var is None or var.vr is None or var.vr in taken or var.vr in knowns:
+            continue
+        taken.add(var.vr)
+        nominal = abs(_number(var.nominal) or 0.0)
+        out.append((Row(var.vr, var.name, "initial", u.dependencies is not None,
+                        Location(file=u.file, line=u.line, path=u.path),
+                        nominal if nominal > 0 else None), u))
+    return out
+
+
+def _with_pattern(rows: list[tuple[Row, Unknown]], cols: list[Column]) -> JacobianLayout:
+    """The declared sparsity. A dependenciesKind list whose length differs from the
+    dependencies claims no kind: the static rules report it, and a probe finding must never be
+    caused by the XML alone."""
+    index = {c.vr: j for j, c in enumerate(cols)}
+    row_cols: list[list[int]] = []
+    kinds_by_row: list[dict[int, str]] = []
+    for row, u in rows:
+        if not row.explicit:
+            row_cols.append(list(range(len(cols))))
+            kinds_by_row.append({})
+            continue
+        deps = u.dependencies or ()
+        kinds = u.dependencies_kind or ()
+        row_cols.append([index[vr] for vr in deps if vr in index])
+        kinds_by_row.append({index[vr]: k for vr, k in zip(deps, kinds) if vr in index}
+                            if len(kinds) == len(deps) else {})
+    pattern = col.Pattern.from_rows(len(cols), row_cols)
+    kinds = tuple(kinds_by_row[i].get(j, "dependent")
+                  for i, j in zip(pattern.rows.tolist(), pattern.cols.tolist()))
+    # time is a known of the FMU's derivatives only where a dependencies list names it (PD-05)
+    explicit_time = {j for (row, _), cs in zip(rows, row_cols) if row.explicit for j in cs
+                     if cols[j].role == "time"}
+    dd = np.array([c.role != "time" or j in explicit_time for j, c in enumerate(cols)])
+    return JacobianLayout(tuple(r for r, _ in rows), tuple(cols), pattern, kinds, dd)

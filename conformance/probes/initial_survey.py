@@ -1,0 +1,317 @@
+"""The Initialization-Mode survey read by the InitialUnknown probes (initial_unknowns.py).
+
+The rows, columns and declared sparsity come from :mod:`.initial_layout`.
+
+**Points.** The XML start values at the default start time, then seeded perturbations of
+:func:`conformance.probes.sampling.near_points` (``STEP`` times each known's nominal scale,
+within its ``min``/``max``, time forward only), drawn from a generator of its own seeded with
+the run's seed, so that no other probe's points depend on whether these ran.
+
+**Measuring.** Every function value is a fresh instance (``ctx.new_initialization``,
+:func:`conformance.runtime.modes.start_initialization`): configured, the knowns set as start
+values in Instantiated, fmi3EnterInitializationMode at the point's time, fmi3GetFloat64 of the
+rows, freed. :func:`conformance.numerics.measure.measure` colours the columns by the declared
+sparsity and verifies the declared zeros, as in Continuous-Time Mode; the FMU's directional
+derivatives, when it provides them, come from one more instance per point, left in
+Initialization Mode while the point is measured. ``max_instances`` bounds the instances over all
+points: a point that would not fit is not measured, and one that runs out is dropped.
+The survey is measured once per FMU and kept in ``ctx.facts``.
+"""
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ..catalogue import default_catalogue
+from ..numerics import colouring as col
+from ..numerics import measure, numdiff
+from ..runtime.layout import Layout
+from .api import FmiError, Point, ProbeContext, ProbeSkipped
+from .initial_layout import build_initial_layout, start_time
+from .jacobian import PointSurvey, Settings, Survey
+from .jacobian_layout import JacobianLayout
+from .sampling import near_points
+
+FACT = "initial.survey"
+SETTINGS_FACT = "initial.settings"
+OWNER = "initial-dependency-undeclared"   # the rule whose options set the survey
+SEED_SALT = 750
+MEASURING = Settings()                    # how to measure: as in Continuous-Time Mode
+
+
+@dataclass(frozen=True)
+class SurveySettings:
+    """The survey's options (those of ``initial-dependency-undeclared``)."""
+
+    points: int           # sampling points, the start values included
+    max_instances: int    # fresh instances over all points
+    max_seconds: float    # wall-clock time over all points
+
+
+@dataclass
+class InitialSurvey(Survey):
+    """A :class:`~conformance.probes.jacobian.Survey` of Initialization Mode: also the mode
+    and the file whose list was verified, and the instances spent."""
+
+    mode: str = "dae"
+    file: str = ""
+    instances: int = 0
+    budget_stop: str = ""
+    fatal: str = ""           # a call returned fmi3Fatal: why the survey stopped
+    # what confirm() needs: the instance factory and what is left of the budget
+    factory: Any = field(default=None, repr=False, compare=False)
+    counter: Any = field(default=None, repr=False, compare=False)
+    confirmed: dict = field(default_factory=dict, repr=False, compare=False)
+
+
+def settings_of(ctx: ProbeContext) -> SurveySettings:
+    """The options given to the owner rule, else its catalogue defaults."""
+    settings = ctx.facts.get(SETTINGS_FACT)
+    if not isinstance(settings, SurveySettings):
+        rule = default_catalogue().get(OWNER)
+        values = rule.option_values if rule else {}
+        settings = SurveySettings(int(values["points"]), int(values["max_instances"]),
+                                  float(values["max_seconds"]))
+        ctx.facts[SETTINGS_FACT] = settings
+    return settings
+
+
+def initial_survey(ctx: ProbeContext) -> InitialSurvey:
+    """The Initialization-Mode Jacobian at every point, once per FMU (memoised)."""
+    memo = ctx.facts.get(FACT)
+    if isinstance(memo, InitialSurvey):
+        return memo
+    result = _run(ctx, settings_of(ctx))
+    ctx.facts[FACT] = result
+    return result
+
+
+def surveyed(ctx: ProbeContext, *, min_points: int = 1) -> InitialSurvey:
+    """The survey, or ProbeSkipped with the reason it has nothing to compare."""
+    s = initial_survey(ctx)
+    if s.layout is None:
+        raise ProbeSkipped(s.reason)
+    if len(s.points) < min_points:
+        why = s.reason or s.budget_stop or _failure(s) or "the other points failed"
+        raise ProbeSkipped(f"{len(s.points)} point(s) could be measured in Initialization "
+                           f"Mode, {min_points} needed: {why}" if s.points else why)
+    return s
+
+
+class _OverBudget(Exception):
+    pass
+
+
+class _Counter:
+    """Fresh instances and seconds left; :meth:`spend` raises _OverBudget past either."""
+
+    def __init__(self, settings: SurveySettings):
+        self.settings = settings
+        self.left, self.used = settings.max_instances, 0
+        self.deadline = time.monotonic() + settings.max_seconds
+        self.why = ""
+
+    def spend(self) -> None:
+        if self.left <= 0:
+            self.why = f"max_instances = {self.settings.max_instances} ran out"
+            raise _OverBudget
+        if time.monotonic() > self.deadline:
+            self.why = f"max_seconds = {self.settings.max_seconds:g} ran out"
+            raise _OverBudget
+        self.left -= 1
+        self.used += 1
+
+
+Factory = Callable[[str, Mapping[int, float], float], Any]
+
+
+class _At:
+    """One point of Initialization Mode: the knowns as a vector (time included), each function
+    value a fresh instance."""
+
+    def __init__(self, factory: Factory, mode: str, layout: JacobianLayout, point: Point,
+                 counter: _Counter):
+        self.factory, self.mode, self.layout, self.counter = factory, mode, layout, counter
+        self.rows = [r.vr for r in layout.rows]
+        self.time = [j for j, c in enumerate(layout.cols) if c.role == "time"]
+        self.t = point.t
+        self.x = np.array([point.t if c.role == "time" else point.values[c.vr]
+                           for c in layout.cols])
+        self.dd_idx = np.flatnonzero(layout.dd_columns)
+        self.dd_vrs = [layout.cols[j].vr for j in self.dd_idx]
+        self.base: Any = None
+
+    def _knowns(self, delta: np.ndarray) -> tuple[dict[int, float], float]:
+        x = self.x + delta
+        t = float(x[self.time[0]]) if self.time else self.t
+        return ({c.vr: float(v) for c, v in zip(self.layout.cols, x) if c.role != "time"}, t)
+
+    def open(self, delta: np.ndarray) -> Any:
+        self.counter.spend()
+        values, t = self._knowns(delta)
+        return self.factory(self.mode, values, t)
+
+    def fun(self, delta: np.ndarray) -> np.ndarray:
+        inst = self.open(delta)
+        try:
+            return np.asarray(inst.get_float64(self.rows), dtype=float)
+        finally:
+            inst.free()
+
+    def directional(self, seed: np.ndarray) -> np.ndarray:
+        return np.asarray(self.base.directional_as_set(
+            self.rows, self.dd_vrs, np.asarray(seed, dtype=float)[self.dd_idx]), dtype=float)
+
+
+def _points(t0: float, layout: Layout, start: dict[int, float], count: int,
+            rng: np.random.Generator) -> list[Point]:
+    first = Point(t0, dict(start), "start")
+    return [first, *near_points(first, layout, rng, count=max(0, count - 1))]
+
+
+def _run(ctx: ProbeContext, settings: SurveySettings) -> InitialSurvey:
+    runtime_layout: Layout | None = ctx.facts.get("layout")  # type: ignore[assignment]
+    if runtime_layout is None or ctx.new_initialization is None:
+        return InitialSurvey(None, "the binary is not loaded")
+    jl, mode, start, reason = build_initial_layout(ctx, runtime_layout)
+    if jl is None:
+        return InitialSurvey(None, reason, mode=mode)
+    me = ctx.model.model_exchange if ctx.model is not None else None
+    result = InitialSurvey(jl, directional=bool(me and me.flag("providesDirectionalDerivatives")),
+                           mode=mode, file=jl.rows[0].location.file or "")
+    rng = np.random.default_rng((ctx.seed, SEED_SALT))
+    points = _points(start_time(ctx.model, runtime_layout), runtime_layout, start,
+                     settings.points, rng)
+    colouring = col.colour_columns(jl.pattern)
+    per_point = 1 + numdiff.CALLS_PER_DIRECTION[MEASURING.method] * (
+        colouring.count + MEASURING.directions)
+    counter = _Counter(settings)
+    result.factory, result.counter = ctx.new_initialization, counter
+    for point in points:
+        need = per_point + (1 if result.directional else 0)
+        if counter.left < need:
+            result.budget_stop = (f"max_instances = {settings.max_instances} leaves room for "
+                                  f"{len(result.points)} point(s); one needs about {need} "
+                                  "fresh instances")
+            break
+        try:
+            measured = _measure_point(ctx.new_initialization, mode, jl, point, result, colouring,
+                                      rng, counter)
+        except _OverBudget:
+            result.budget_stop = (f"{counter.why} while point {point.label} was measured, "
+                                  f"after {len(result.points)} point(s)")
+            break
+        except ProbeSkipped as exc:  # the runtime cannot go on (a call blocked after a hang)
+            result.reason = str(exc)
+            break
+        if result.fatal:  # no call at all after fmi3Fatal (SM-04): the stage starts afresh
+            result.reason = result.fatal
+            break
+        if measured is not None:
+            result.points.append(measured)
+    result.instances = counter.used
+    if not result.points and not result.reason:
+        result.reason = (result.budget_stop or _failure(result)
+                         or "no point could be measured in Initialization Mode")
+    return result
+
+
+def _measure_point(factory: Factory, mode: str, layout: JacobianLayout, point: Point,
+                   result: InitialSurvey, colouring: col.Colouring, rng: np.random.Generator,
+                   counter: _Counter) -> PointSurvey | None:
+    at = _At(factory, mode, layout, point, counter)
+    lower = np.array([c.lower for c in layout.cols])
+    upper = np.array([c.upper for c in layout.cols])
+    steps = numdiff.step_sizes(at.x, layout.nominal, method=MEASURING.method, lower=lower,
+                               upper=upper)
+    try:
+        if result.directional:
+            at.base = at.open(np.zeros(len(layout.cols)))
+            if not result.probed:
+                try:  # one probing call, so that a refusal is known before measuring
+                    at.directional(np.zeros(len(layout.cols)))
+                except FmiError as exc:
+                    result.failures.append(("directional", point, exc))
+                    result.directional = False
+                    _note_fatal(result, exc)
+                result.probed = True
+                if result.fatal:
+                    return None
+        sources = measure.Sources(at.fun, at.directional if result.directional else None,
+                                  None, layout.dd_columns)
+        entries = measure.measure(sources, layout.pattern, colouring, steps, at.x, rng,
+                                  method=MEASURING.method, directions=MEASURING.directions,
+                                  suspicion=MEASURING.suspicion, ulps=MEASURING.ulps)
+    except FmiError as exc:
+        result.failures.append(("evaluate", point, exc))
+        _note_fatal(result, exc)
+        return None
+    finally:
+        if at.base is not None:
+            at.base.free()
+    return PointSurvey(point, at.x, entries)
+
+
+def confirm(s: InitialSurvey, ps: PointSurvey, j: int, *, factor: float, ulps: float
+            ) -> tuple[np.ndarray, np.ndarray] | None:
+    """Column ``j`` at the point of ``ps`` measured again with central differences at
+    ``factor`` times the survey's step: (values, error bounds), shape (m,), per unit of the
+    known; None when it cannot be (no room within the bounds, the budget spent, the FMU failed).
+
+    The unknowns of Initialization Mode come out of the FMU's own solver, whose error can be
+    far above the rounding noise the error estimate assumes (an ill-conditioned dg/dw amplifies
+    it) and correlated over a step, so that two step sizes may agree by chance. A finding is
+    only reported when it holds at a step ``factor`` times larger too, where that noise weighs
+    ``factor`` times less and the truncation error is estimated again.
+    """
+    key = (ps.point.label, j, factor)
+    if key in s.confirmed:
+        return s.confirmed[key]
+    layout = s.layout
+    assert layout is not None
+    lower = np.array([c.lower for c in layout.cols])
+    upper = np.array([c.upper for c in layout.cols])
+    scale = factor * np.maximum(np.abs(ps.x), layout.nominal)
+    steps = numdiff.step_sizes(ps.x, scale, method=MEASURING.method, lower=lower, upper=upper)
+    out = None
+    if steps[j] > 0 and s.counter is not None and not s.fatal:
+        at = _At(s.factory, s.mode, layout, ps.point, s.counter)
+        direction = np.zeros(len(layout.cols))
+        direction[j] = steps[j]
+        try:
+            diff = numdiff.difference(at.fun, direction, method=MEASURING.method)
+        except FmiError as exc:
+            _note_fatal(s, exc)
+        except (_OverBudget, ProbeSkipped):
+            pass
+        else:
+            noise = ulps * ps.entries.basis
+            out = (diff.value / steps[j], diff.error(noise) / steps[j])
+    s.confirmed[key] = out
+    return out
+
+
+def _note_fatal(s: InitialSurvey, exc: FmiError) -> None:
+    if exc.status == "fmi3Fatal" and not s.fatal:
+        s.fatal = (f"{exc.call} returned fmi3Fatal in Initialization Mode: no instance may be "
+                   "called after it (SM-04)")
+
+
+def _failure(s: InitialSurvey) -> str:
+    """Why the first point that failed failed, in words ("" if none did)."""
+    for what, point, exc in s.failures:
+        if what != "evaluate":
+            continue
+        first = f": {exc.log[0]}" if exc.log else ""
+        if exc.call == "fmi3SetFloat64":
+            why = "the FMU rejects the start values of the knowns of Initialization Mode"
+        elif exc.call == "fmi3EnterInitializationMode" and s.mode == "dae":
+            why = "the FMU refuses to initialise in DAE mode (alpha.1 allows it, DAE-14)"
+        else:
+            why = "Initialization Mode could not be evaluated"
+        return f"{why}: {exc.call} returned {exc.status} at point {point.label}{first}"
+    return ""

@@ -1,0 +1,228 @@
+"""The endurance probes (DAE760-DAE762), the --endurance levels, and a late crash's call count.
+
+The defect variants (tests/fixtures/defects/endurance.py) strike after 5000 FMI calls on one
+instance (LATE_AFTER in scenes/common/fmi3_framework.c); test_defects.py checks that each is
+caught by its rule only, these tests check what the findings carry.
+"""
+from __future__ import annotations
+
+import dataclasses
+import json
+
+import numpy as np
+import pytest
+
+from conformance.catalogue import Catalogue, default_catalogue
+from conformance.cli import main
+from conformance.engine import EngineOptions, check_fmu
+from conformance.findings import Finding, FmuReport, thaw
+from conformance.probes import endurance_run
+from conformance.probes.api import Point, ProbeContext, ProbeSkipped
+from conformance.probes.endurance import KINDS, memory_grows
+from conformance.probes.endurance_run import FACT, PathRun, RunSettings, lap_points
+from conformance.runtime.callrecord import CallRecord
+from scenes.build import build_scene
+
+ENDURANCE = ("DAE760", "DAE761", "DAE762")
+LATE_AFTER = 5000      # scenes/common/fmi3_framework.c: calls on one instance before it strikes
+MEMORY_OPTIONS = default_catalogue()["memory-grows"].option_values
+
+
+def _check(scene: str, *defines: str, **options) -> FmuReport:
+    return check_fmu(build_scene(scene, defines=list(defines)), options=EngineOptions(**options))
+
+
+def _only(report: FmuReport, code: str) -> Finding:
+    found = [f for f in report.findings if f.code == code]
+    assert len(found) == 1, [(f.code, f.message) for f in report.findings]
+    return found[0]
+
+
+# -- a late crash: binary-crashed with the call count ------------------------------------------
+
+
+def test_late_crash_is_binary_crashed_with_the_call_count_and_is_not_repeated():
+    report = _check("SimpleDAE", "DEFECT_LATE_CRASH")
+    crash = _only(report, "DAE701")
+    ev = thaw(crash.evidence)
+    assert ev["probe"] == "DAE760" and ev["call_in_progress"] is True
+    assert ev["call"].startswith("fmi3")
+    # fmi3InstantiateModelExchange and LATE_AFTER calls returned; the next one crashed
+    assert ev["calls_in_probe"] == LATE_AFTER + 1
+    assert ev["call_count"] > ev["calls_in_probe"]  # the point probes ran before, same worker
+    # memory-grows judges the same run: the fresh worker does not run it (and crash) again
+    assert [f.code for f in report.findings] == ["DAE701"]
+    assert "DAE761" in dict(report.rules_skipped)
+    assert {"DAE760", "DAE762"} <= set(report.rules_run)
+
+
+def test_a_crash_outside_the_endurance_probes_carries_no_call_count():
+    report = _check("HelloWorldDAE", "DEFECT_SEGFAULT_GETFLOAT64", endurance="off")
+    crashes = [f for f in report.findings if f.code == "DAE701"]
+    assert crashes and all("call_count" not in dict(f.evidence) for f in crashes)
+
+
+def test_call_record_counts_the_calls_of_the_worker_and_of_the_probe():
+    record = CallRecord()
+    record.set_probe("setup")
+    for n in range(1, 8):
+        record.enter("fmi3SetTime", n)
+        record.leave()
+    record.set_probe("DAE760")
+    record.enter("fmi3GetFloat64", 8)
+    assert CallRecord.parse(record.buffer) == ("DAE760", "fmi3GetFloat64", True)
+    counts = CallRecord.counts(record.buffer)
+    assert counts == (8, 7)
+    assert counts.completed(True) == 7 and counts.completed_in_probe(True) == 0
+    record.leave()
+    assert counts.completed(False) == 8 and counts.completed_in_probe(False) == 1
+    assert CallRecord.counts(b"") == (0, 0)
+
+
+# -- evaluation-fails-late ----------------------------------------------------------------------
+
+
+def test_late_error_names_the_call_the_count_and_the_fresh_instance():
+    finding = _only(_check("HelloWorldDAE", "DEFECT_LATE_ERROR"), "DAE760")
+    ev = thaw(finding.evidence)
+    assert ev["status"] == "fmi3Error" and ev["call"].startswith("fmi3")
+    assert ev["calls_before"] == LATE_AFTER + 1   # fmi3InstantiateModelExchange + LATE_AFTER
+    assert ev["fresh_instance"] == "ok"
+    assert ev["level"] == "quick" and ev["lap"] >= 2
+    assert finding.subject == ev["call"]
+
+
+def test_a_clean_scene_makes_the_whole_budget_of_calls():
+    report = _check("HelloWorldDAE", select=("DAE76",))
+    assert report.findings == ()
+    info = thaw(report.info)["endurance"]
+    budget = default_catalogue()["evaluation-fails-late"].option_values["calls_quick"]
+    assert info["level"] == "quick" and info["stopped"] == "budget"
+    assert budget <= info["path_calls"] < budget + 10 and info["laps"] > 10
+    assert info["cycles"] == default_catalogue()["DAE762"].option_values["cycles_quick"]
+
+
+def _with_options(changes: dict[str, dict[str, object]]) -> Catalogue:
+    rules = []
+    for rule in default_catalogue():
+        if rule.code in changes:
+            rule = dataclasses.replace(rule, options=tuple(sorted(
+                {**rule.option_values, **changes[rule.code]}.items())))
+        rules.append(rule)
+    return Catalogue(rules)
+
+
+def test_long_level_uses_the_long_budget():
+    catalogue = _with_options({"DAE760": {"calls_long": 3000}, "DAE762": {"cycles_long": 3}})
+    report = check_fmu(build_scene("SimpleDAE"), catalogue=catalogue,
+                       options=EngineOptions(select=("DAE76",), endurance="long"))
+    assert report.findings == ()
+    info = thaw(report.info)["endurance"]
+    assert info["level"] == "long" and info["budget_calls"] == 3000
+    assert 3000 <= info["path_calls"] < 3010 and info["cycles"] == 3
+
+
+# -- memory-grows -------------------------------------------------------------------------------
+
+
+def test_leak_is_reported_with_bytes_per_call_and_the_samples():
+    finding = _only(_check("Robertson", "DEFECT_LEAK", select=("DAE76",)), "DAE761")
+    ev = thaw(finding.evidence)
+    # 1 KiB per fmi3GetFloat64, one of the five calls of each step of the path
+    assert 100 < ev["bytes_per_call"] < 600
+    assert all(100 < q < 600 for q in ev["quarter_slopes"])
+    assert ev["growth_kib"] >= ev["min_growth_kib"]
+    assert ev["threshold_bytes_per_call"] == MEMORY_OPTIONS["bytes_per_call_quick"]
+    calls = [c for c, _ in ev["samples"]]
+    assert len(calls) >= 8 and calls == sorted(calls) and ev["samples"][0] == [0, 0]
+    assert ev["samples"][-1][1] > ev["growth_kib"]     # the second half grew by growth_kib
+
+
+def _context(facts: dict) -> ProbeContext:
+    return ProbeContext(model=None, manifest=None, draft="alpha1", seed=0,  # type: ignore[arg-type]
+                        rng=np.random.default_rng(0), points=[], dae=None, ode=None,
+                        new_instance=lambda mode: None, facts=facts)  # type: ignore[arg-type,return-value]
+
+
+def test_memory_is_read_on_linux_only(monkeypatch):
+    monkeypatch.setattr(endurance_run.sys, "platform", "darwin")
+    assert endurance_run.resident_bytes() is None
+    settings = RunSettings("quick", 100, 1.0, 40, 256.0)
+    ctx = _context({FACT: PathRun(settings, memory_note="resident memory is Linux only")})
+    with pytest.raises(ProbeSkipped):
+        list(memory_grows(ctx, **MEMORY_OPTIONS))
+
+
+def test_a_run_too_short_to_judge_memory_is_skipped():
+    settings = RunSettings("quick", 100, 1.0, 40, 256.0)
+    ctx = _context({FACT: PathRun(settings, calls=12, stopped="failure",
+                                  samples=[(0, 1 << 20), (10, 1 << 21)])})
+    with pytest.raises(ProbeSkipped):
+        list(memory_grows(ctx, **MEMORY_OPTIONS))
+
+
+# -- instances-not-independent ------------------------------------------------------------------
+
+
+def test_global_state_is_found_by_setting_two_instances_in_turn():
+    finding = _only(_check("SimpleDAE", "DEFECT_GLOBAL_STATE", select=("DAE76",)), "DAE762")
+    ev = thaw(finding.evidence)
+    assert ev["kind"] == "interleaved" == finding.subject
+    names = {d["variable"] for d in ev["differences"]}
+    assert names and names <= {"der(x1)", "der(x2)", "__residual0", "__residual1", "y1", "y2"}
+    assert all(d["difference"] > 0 for d in ev["differences"])
+
+
+def test_stale_state_is_found_after_a_free_instantiate_cycle():
+    finding = _only(_check("HelloWorldDAE", "DEFECT_STALE_STATES", select=("DAE76",)), "DAE762")
+    ev = thaw(finding.evidence)
+    assert ev["kind"] == "cycle" and ev["cycle"] == 1 and ev["cycles_run"] == 1
+    assert "x" in {d["variable"] for d in ev["differences"]}
+    assert set(KINDS) >= {ev["kind"]}
+
+
+# -- the level "off" ----------------------------------------------------------------------------
+
+
+def test_off_skips_the_endurance_stage_with_a_reason():
+    report = _check("HelloWorldDAE", "DEFECT_LATE_ERROR", endurance="off")
+    skipped = dict(report.rules_skipped)
+    assert all(code in skipped for code in ENDURANCE)
+    assert not set(ENDURANCE) & set(report.rules_run)
+    assert not [f for f in report.findings if f.code in ENDURANCE]
+    assert "endurance" not in thaw(report.info)
+
+
+def test_cli_option_and_config_key(tmp_path, monkeypatch, capsys):
+    fmu = str(build_scene("HelloWorldDAE"))
+    out = tmp_path / "r.json"
+
+    def skipped(*argv: str) -> set[str]:
+        assert main(["check", fmu, "--select", "DAE76", "--format", "json", "-o", str(out),
+                     *argv]) == 0
+        entries = json.loads(out.read_text())["fmus"][0]["rules_skipped"]
+        return {e["code"] for e in entries}
+
+    monkeypatch.chdir(tmp_path)
+    assert skipped("--endurance", "off") == set(ENDURANCE)
+    (tmp_path / "pyproject.toml").write_text('[tool.lsdae]\nendurance = "off"\n')
+    assert skipped() == set(ENDURANCE)
+    assert skipped("--endurance", "quick") == set()     # the command line wins
+    (tmp_path / "pyproject.toml").write_text('[tool.lsdae]\nendurance = "forever"\n')
+    assert main(["check", fmu, "--select", "DAE76"]) == 2
+    assert "endurance" in capsys.readouterr().err
+
+
+# -- the path ---------------------------------------------------------------------------------
+
+
+def test_the_path_is_a_closed_polygon_through_the_points():
+    a = Point(0.0, {1: 0.0, 2: 10.0}, "start")
+    b = Point(0.4, {1: 4.0, 2: 10.0}, "near-1")
+    lap = lap_points([a, b], steps=4)
+    assert len(lap) == 8
+    assert lap[0].t == 0.0 and lap[0].values == a.values
+    assert lap[2].t == pytest.approx(0.2) and lap[2].values[1] == pytest.approx(2.0)
+    assert lap[4].values == b.values and lap[6].values[1] == pytest.approx(2.0)
+    assert min(p.t for p in lap) >= 0.0
+    assert lap_points([a]) == [a] and lap_points([]) == []

@@ -31,6 +31,7 @@ class Dimension(NamedTuple):
     start: str | None
     vr: int | None
     line: int | None
+    raw_vr: str | None = None     # the attribute text, when it did not parse as a valueReference
 
 
 class Variable(NamedTuple):
@@ -235,8 +236,10 @@ def _children_of_variable(el: etree._Element, start: str | None, dims: list[Dime
             if (shown := child.get("displayUnit")) is not None:
                 alias_units.append((aliases[-1], shown))
         elif tag == "Dimension":
-            dims.append(Dimension(child.get("start"), parse_vr(child.get("valueReference")),
-                                  child.sourceline))
+            raw = child.get("valueReference")
+            vr = parse_vr(raw)
+            dims.append(Dimension(child.get("start"), vr, child.sourceline,
+                                  raw if vr is None else None))
     return start if start is not None or not starts else " ".join(starts)
 
 

@@ -84,11 +84,12 @@ def _dimension_fault(model: ModelDescription, dim: Dimension, enable: frozenset[
                      ) -> tuple[str, Variable | None] | None:
     """Why a <Dimension> breaks MV-41 (and the variable it refers to), or None."""
     if dim.start is not None:
-        if dim.vr is not None:
+        if dim.vr is not None or dim.raw_vr is not None:
             return "both", None
         return ("zero", None) if _is_zero(dim.start) else None
     if dim.vr is None:
-        return "neither", None
+        # a valueReference that is no UInt32 is the schema stage's to report
+        return ("neither", None) if dim.raw_vr is None else None
     target = model.by_vr.get(dim.vr)
     if target is None:
         return "unknown-vr", None

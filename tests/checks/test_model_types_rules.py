@@ -174,6 +174,13 @@ def test_dimension_size_variable_without_start_is_start_missings():
     assert codes(ctx_of(var)) == set()
 
 
+def test_malformed_dimension_reference_is_the_schemas():
+    var = '<Float64 name="v" valueReference="2"><Dimension valueReference="x1"/></Float64>'
+    assert codes(ctx_of(var)) == set()
+    var = '<Float64 name="v" valueReference="2"><Dimension/></Float64>'
+    assert codes(ctx_of(var)) == {"DAE536"}
+
+
 def test_huge_numbers_are_no_internal_error():
     digits = "9" * 5000
     var = (f'<Float64 name="s" valueReference="2" variability="discrete" clocks="{digits}"/>'

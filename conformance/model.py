@@ -200,11 +200,11 @@ def _variable(el: etree._Element) -> Variable | None:
     variability, initial = _effective(type_, causality, declared_var)
     declared_init = get("initial")
     start = get("start")
-    dims: list[Dimension] = []
-    aliases: list[str] = []
-    alias_units: list[tuple[str, str]] = []
-    if len(el):
-        start = _children_of_variable(el, start, dims, aliases, alias_units)
+    dims: tuple[Dimension, ...] = ()
+    aliases: tuple[str, ...] = ()
+    alias_units: tuple[tuple[str, str], ...] = ()
+    if len(el):  # most variables have no children: no lists to build for them
+        start, dims, aliases, alias_units = _children_of_variable(el, start)
     raw_vr = get("valueReference")
     vr = parse_vr(raw_vr)
     derivative = get("derivative")
@@ -213,18 +213,22 @@ def _variable(el: etree._Element) -> Variable | None:
         get("name", ""), vr, type_, causality, variability, declared_init or initial,
         declared_var, declared_init, start,
         parse_vr(derivative) if derivative is not None else None,
-        el.sourceline, tuple(dims), get("nominal"), get("min"), get("max"),
+        el.sourceline, dims, get("nominal"), get("min"), get("max"),
         get("description"), get("reinit", "false") in ("true", "1"), get("clocks"),
         parse_vr(previous) if previous is not None else None,
-        raw_vr if vr is None else None, tuple(aliases), get("declaredType"), get("unit"),
-        get("displayUnit"), tuple(alias_units),
+        raw_vr if vr is None else None, aliases, get("declaredType"), get("unit"),
+        get("displayUnit"), alias_units,
     )
 
 
-def _children_of_variable(el: etree._Element, start: str | None, dims: list[Dimension],
-                          aliases: list[str], alias_units: list[tuple[str, str]]) -> str | None:
-    """Read <Start>, <Alias> and <Dimension> children; returns the start value."""
-    starts = []
+def _children_of_variable(el: etree._Element, start: str | None) -> tuple[
+        str | None, tuple[Dimension, ...], tuple[str, ...], tuple[tuple[str, str], ...]]:
+    """Read <Start>, <Alias> and <Dimension> children: the start value, the dimensions, the
+    alias names and the (alias name, displayUnit) pairs."""
+    starts: list[str] = []
+    dims: list[Dimension] = []
+    aliases: list[str] = []
+    alias_units: list[tuple[str, str]] = []
     for child in el:
         if not isinstance(child.tag, str):
             continue
@@ -240,7 +244,9 @@ def _children_of_variable(el: etree._Element, start: str | None, dims: list[Dime
             vr = parse_vr(raw)
             dims.append(Dimension(child.get("start"), vr, child.sourceline,
                                   raw if vr is None else None))
-    return start if start is not None or not starts else " ".join(starts)
+    if starts and start is None:
+        start = " ".join(starts)
+    return start, tuple(dims), tuple(aliases), tuple(alias_units)
 
 
 def _children(el: etree._Element | None, name: str) -> list[etree._Element]:

@@ -27,6 +27,7 @@ from typing import Any
 import numpy as np
 
 from .consistent import DaeSystem, consistent_start
+from .events import EventLog, first_time_event, read_indicators, run_through_events, summarise
 from .limits import Budget, EvaluationFailed, Stepper, Stop, blame_failures, scaled_condition
 from .settings import BUDGET, FMU_FAILED, INIT, OK, SINGULAR, SOLVER, Settings, Trajectory
 
@@ -84,6 +85,10 @@ def _callbacks(run: _Run):
         out[:nx] = value[:nx] - yp[:nx]
         out[nx:] = value[nx:]
 
+    def events(t: float, y: np.ndarray, yp: np.ndarray, out: np.ndarray) -> None:
+        run.budget.check_clock(t)
+        out[:] = read_indicators(system, t, y)
+
     def jacobian(t: float, y: np.ndarray, yp: np.ndarray, res: np.ndarray, cj: float,
                  out: np.ndarray) -> None:
         run.budget.check_clock(t)
@@ -102,7 +107,32 @@ def _callbacks(run: _Run):
         out[:, :] = jac
         out[:nx, :nx] -= cj * eye
 
-    return residual, jacobian
+    return residual, jacobian, events
+
+
+def _restart(run: _Run, solver: Any, atol: np.ndarray, log: EventLog):
+    """After an event: consistent algebraic variables for the new residuals (they may jump;
+    the largest jump goes to ``log``), then IDA re-initialised at the event (its root finding
+    stays)."""
+    def restart(t: float, y: np.ndarray) -> np.ndarray:
+        try:
+            y, info = consistent_start(run.system, t, y, atol, run.settings.rtol)
+            log.residual_jump = max(log.residual_jump,
+                                    info["residual_before"].get("max_abs") or 0.0)
+            yp = _initial_slope(run.system, t, y)
+        except EvaluationFailed as exc:
+            raise Stop(FMU_FAILED, f"{exc.call} returned {exc.status} after the event at "
+                       f"t = {t:.10g}", t, call=exc.call, status=exc.status,
+                       log=list(exc.log)[:5]) from None
+        except Stop as exc:
+            if exc.status != INIT:
+                raise
+            raise Stop(SOLVER, f"no consistent algebraic variables after the event at "
+                       f"t = {t:.10g}: {exc.message}", t, after_event=True,
+                       **exc.details) from None
+        solver.init_step(t, y, yp)
+        return y
+    return restart
 
 
 def _watch_condition(run: _Run, t: float, y: np.ndarray, jac: np.ndarray) -> None:
@@ -129,10 +159,15 @@ def _singular_details(system: DaeSystem, y: np.ndarray, cond: float, direction: 
 
 
 def integrate_dae(system: DaeSystem, settings: Settings, *, t0: float, y0: np.ndarray,
-                  stop: float, times: np.ndarray | None = None) -> Trajectory:
+                  stop: float, times: np.ndarray | None = None,
+                  start_update: Any = None) -> Trajectory:
     """Integrate from the (possibly inconsistent) point ``y0 = [x0; w0]`` at ``t0`` to ``stop``.
 
-    Never raises for a bad model: every way a run can end is a :class:`Trajectory` status.
+    A system with ``indicator_names`` (an :class:`~conformance.numerics.events.EventSystem`)
+    has its state events found and handled, and the time events its updates schedule, the
+    first by ``start_update`` (the event update that ended initialisation, whose
+    ``terminateSimulation`` ends the run at once). Never raises for a bad model: every way a
+    run can end is a :class:`Trajectory` status.
     """
     from sksundae.ida import IDA  # SUNDIALS: loaded only when a DAE is integrated
 
@@ -150,6 +185,7 @@ def integrate_dae(system: DaeSystem, settings: Settings, *, t0: float, y0: np.nd
                       jacobian=system.jacobian_source)
     calls0 = system.fmi_calls
     reached = 0
+    log = EventLog(indicators=len(getattr(system, "indicator_names", ())))
 
     def record(k: int, t: float, y: np.ndarray) -> None:
         nonlocal reached
@@ -165,12 +201,19 @@ def integrate_dae(system: DaeSystem, settings: Settings, *, t0: float, y0: np.nd
         traj.init["condition"] = _finite_or_text(cond)
         _watch_condition(run, t0, y, start_jac)
         record(0, t0, y)
-        residual, jacobian = _callbacks(run)
+        residual, jacobian, events = _callbacks(run)
+        watch = {"eventsfn": events, "num_events": log.indicators} if log.indicators else {}
         solver = IDA(residual, jacfn=jacobian, rtol=settings.rtol, atol=atol,
-                     algebraic_idx=list(range(system.nx, n)) or None, linsolver="dense")
+                     algebraic_idx=list(range(system.nx, n)) or None, linsolver="dense",
+                     **watch)
         solver.init_step(t0, y, _initial_slope(system, t0, y))
-        stepper = Stepper(solver, times, stop, budget, record, y)
-        stepper.run()
+        stepper = Stepper(solver, times, stop, budget, record, y, exact=bool(log.indicators))
+        if getattr(start_update, "terminate", False):
+            log.terminated_at = t0
+        else:
+            run_through_events(stepper, system, log,  # type: ignore[arg-type]
+                               next_time=first_time_event(start_update, t0),
+                               restart=_restart(run, solver, atol, log))
         _finish(traj, run, stepper)
     except Stop as stop_:
         _stopped(traj, run, stepper, stop_)
@@ -185,6 +228,7 @@ def integrate_dae(system: DaeSystem, settings: Settings, *, t0: float, y0: np.nd
     traj.wall_s = budget.elapsed()
     traj.max_condition, traj.max_condition_t = run.max_condition, run.max_condition_t
     traj.recovered = sum(1 for t, _, _ in run.failures if t <= traj.t_end)
+    summarise(log, traj)
     return traj
 
 

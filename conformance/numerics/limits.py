@@ -121,40 +121,73 @@ def scaled_condition(jac: np.ndarray, nx: int, nominal: np.ndarray) -> tuple[flo
     return (float(1.0 / sv[-1]) if sv[-1] > 0 else np.inf), vt[-1]
 
 
+ROOT_RETURN = 2   # IDA_ROOT_RETURN and CV_ROOT_RETURN: a step ended at a root of the events
+
+
 class Stepper:
     """Steps a scikit-sundae IDA or CVODE solver (after ``init_step``) from ``times[0]`` to
     ``stop`` one internal step at a time, recording the solution at each of ``times`` passed.
 
     ``steps``, ``t`` and ``y`` follow the last accepted step, also when :meth:`run` ends with
     :class:`Stop` (a limit, or raised by a callback); ``failure`` is the solver's result when
-    a step failed.
+    a step failed; ``root`` says the last step ended at a root of the solver's events function
+    (a state event, at ``t``); ``k`` is the next output time to record.
+
+    ``exact``: never step past an output time (each is a stop time of the solver), for runs
+    that root-find on event indicators: SUNDIALS cannot interpolate back once a step has ended
+    at a root, so no output time may lie inside such a step. Without it the solver steps freely
+    and the outputs are interpolated.
     """
 
     def __init__(self, solver: Any, times: np.ndarray, stop: float, budget: Budget,
-                 record: Callable[[int, float, np.ndarray], None], y0: np.ndarray):
+                 record: Callable[[int, float, np.ndarray], None], y0: np.ndarray, *,
+                 exact: bool = False):
         self.solver, self.times, self.stop, self.budget, self.record = (
             solver, times, stop, budget, record)
         self.steps, self.t, self.y = 0, float(times[0]), np.asarray(y0, dtype=float)
         self.failure: Any = None
+        self.exact, self.root, self.k = exact, False, 1
 
-    def run(self) -> None:
-        k = 1
-        while k < len(self.times):
+    @property
+    def done(self) -> bool:
+        """Every output time is recorded (or the run has failed)."""
+        return self.k >= len(self.times) or self.failure is not None
+
+    def run(self, until: float | None = None) -> None:
+        """Step until every output time is recorded, the stop time or ``until`` (a time event:
+        an output at exactly ``until`` is left for :meth:`restart`, after the event) is
+        reached, a root of the events function is found (``root``) or a step fails."""
+        end = self.stop if until is None else until
+        hold = np.inf if until is None else until
+        self.root = False
+        while self.k < len(self.times):
             self.budget.check_step(self.t, self.steps)
-            result = self.solver.step(self.stop, method="onestep", tstop=self.stop)
+            target = min(end, float(self.times[self.k])) if self.exact else end
+            result = self.solver.step(target, method="onestep", tstop=target)
             if not result.success:
                 self.failure = result
                 return
             self.steps += 1
             self.t, self.y = float(result.t), np.asarray(result.y, dtype=float)
-            while k < len(self.times) and self.times[k] <= self.t:
-                at = (result if self.times[k] == self.t
-                      else self.solver.step(float(self.times[k]), method="normal"))
-                self.record(k, float(self.times[k]), np.asarray(at.y, dtype=float))
-                k += 1
-            if self.t >= self.stop:
+            if result.status == ROOT_RETURN:
+                self.root = True  # outputs up to t were recorded (exact); the rest follow
+                return
+            while self.k < len(self.times) and hold > self.times[self.k] <= self.t:
+                at = (result if self.times[self.k] == self.t
+                      else self.solver.step(float(self.times[self.k]), method="normal"))
+                self.record(self.k, float(self.times[self.k]), np.asarray(at.y, dtype=float))
+                self.k += 1
+            if self.t >= end:
                 return
             self.budget.progress(self.t, self.steps)
+
+    def restart(self, t: float, y: np.ndarray) -> None:
+        """After an event at ``t`` (the solver re-initialised there with ``y``): record the
+        output times up to ``t`` with the values after the event."""
+        self.t, self.y, self.root = float(t), np.asarray(y, dtype=float), False
+        while self.k < len(self.times) and self.times[self.k] <= self.t:
+            self.record(self.k, float(self.times[self.k]), self.y)
+            self.k += 1
 
 
 def blame_failures(traj: Any, failures: list[tuple[float, str, str]], stop: Stop,

@@ -9,10 +9,11 @@ Newton iteration fail, and CVODE cuts the step.
 """
 from __future__ import annotations
 
-from typing import Protocol, Sequence
+from typing import Any, Protocol, Sequence
 
 import numpy as np
 
+from .events import EventLog, first_time_event, read_indicators, run_through_events, summarise
 from .limits import Budget, EvaluationFailed, Stepper, Stop, blame_failures
 from .settings import BUDGET, FMU_FAILED, OK, SOLVER, Settings, Trajectory
 
@@ -36,9 +37,12 @@ class OdeSystem(Protocol):
 
 def integrate_ode(system: OdeSystem, settings: Settings, *, t0: float, x0: np.ndarray,
                   stop: float, times: np.ndarray | None = None,
-                  algebraic_nominal: np.ndarray | None = None) -> Trajectory:
+                  algebraic_nominal: np.ndarray | None = None,
+                  start_update: Any = None) -> Trajectory:
     """Integrate ``x' = f(t, x)`` from ``x0`` at ``t0`` to ``stop``; never raises for a bad
-    model: every way a run can end is a :class:`Trajectory` status."""
+    model: every way a run can end is a :class:`Trajectory` status. Events as in DAE mode
+    (``integrate_dae``): a system with ``indicator_names`` has its state events handled, and
+    ``start_update`` schedules the first time event."""
     from sksundae.cvode import CVODE  # SUNDIALS: loaded only when an ODE is integrated
 
     times = settings.times(t0, stop) if times is None else np.asarray(times, dtype=float)
@@ -59,6 +63,7 @@ def integrate_ode(system: OdeSystem, settings: Settings, *, t0: float, x0: np.nd
     failures: list[tuple[float, str, str]] = []
     calls0 = system.fmi_calls
     reached = 0
+    log = EventLog(indicators=len(getattr(system, "indicator_names", ())))
 
     def rhs(t: float, x: np.ndarray, xp: np.ndarray) -> None:
         budget.check_clock(t)
@@ -93,6 +98,10 @@ def integrate_ode(system: OdeSystem, settings: Settings, *, t0: float, x0: np.nd
         last["jac"] = j
         out[:, :] = j
 
+    def events(t: float, x: np.ndarray, out: np.ndarray) -> None:
+        budget.check_clock(t)
+        out[:] = read_indicators(system, t, x)  # type: ignore[arg-type]
+
     def record(k: int, t: float, x: np.ndarray) -> None:
         nonlocal reached
         values[k, :nx] = x
@@ -103,11 +112,21 @@ def integrate_ode(system: OdeSystem, settings: Settings, *, t0: float, x0: np.nd
     try:
         x0 = np.asarray(x0, dtype=float)
         record(0, t0, x0)
+        watch = {"eventsfn": events, "num_events": log.indicators} if log.indicators else {}
         solver = CVODE(rhs, jacfn=jac, method="BDF", rtol=settings.rtol, atol=atol,
-                       linsolver="dense")
+                       linsolver="dense", **watch)
         solver.init_step(t0, x0)
-        stepper = Stepper(solver, times, stop, budget, record, x0)
-        stepper.run()
+        stepper = Stepper(solver, times, stop, budget, record, x0, exact=bool(log.indicators))
+
+        def restart(t: float, x: np.ndarray) -> np.ndarray:
+            solver.init_step(t, x)
+            return x
+
+        if getattr(start_update, "terminate", False):
+            log.terminated_at = t0
+        else:
+            run_through_events(stepper, system, log,  # type: ignore[arg-type]
+                               next_time=first_time_event(start_update, t0), restart=restart)
         failure = stepper.failure
         pending = [f for f in failures if f[0] > stepper.t]
         if failure is None:
@@ -140,4 +159,5 @@ def integrate_ode(system: OdeSystem, settings: Settings, *, t0: float, x0: np.nd
     traj.fmi_calls = system.fmi_calls - calls0
     traj.wall_s = budget.elapsed()
     traj.recovered = sum(1 for t, _, _ in failures if t <= traj.t_end)
+    summarise(log, traj)
     return traj

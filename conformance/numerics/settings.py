@@ -119,6 +119,16 @@ class Trajectory:
     event: dict[str, Any] = field(default_factory=dict)
     # DAE mode: the largest |residual| at the output times ({"max_abs", "residual", "t"})
     residual_along: dict[str, Any] = field(default_factory=dict)
+    # events (numerics/events.py): indicators watched, events handled, their times (the first
+    # 1000), fmi3UpdateDiscreteStates calls, where the FMU asked to end the run, and (DAE mode)
+    # the largest residual after an event, before the algebraic variables were solved again
+    indicators: int = 0
+    state_events: int = 0
+    time_events: int = 0
+    event_times: list[float] = field(default_factory=list)
+    event_updates: int = 0
+    terminated_at: float | None = None
+    residual_jump: float = 0.0
 
     @property
     def ok(self) -> bool:
@@ -149,9 +159,21 @@ class Trajectory:
         }
         if self.residual_along:
             info["residual_along"] = self.residual_along
+        if self.has_events:  # only then: the reports of FMUs without events stay as they were
+            info["events"] = {
+                "indicators": self.indicators, "state": self.state_events,
+                "time": self.time_events, "times": [float(t) for t in self.event_times],
+                "updates": self.event_updates, "terminated_at": self.terminated_at,
+                "residual_jump": self.residual_jump}
         if timing:
             info["wall_s"] = round(self.wall_s, 6)
         return info
+
+    @property
+    def has_events(self) -> bool:
+        """Whether the run watched event indicators or handled an event."""
+        return bool(self.indicators or self.state_events or self.time_events
+                    or self.terminated_at is not None)
 
     @classmethod
     def from_info(cls, info: Mapping[str, Any]) -> Trajectory:
@@ -176,7 +198,20 @@ class Trajectory:
             max_condition=_float(info.get("max_condition")),
             max_condition_t=info.get("max_condition_t"), init=dict(info.get("init") or {}),
             event=dict(info.get("event") or {}),
-            residual_along=dict(info.get("residual_along") or {}))
+            residual_along=dict(info.get("residual_along") or {}),
+            **_events_from(info.get("events")))
+
+
+def _events_from(events: Any) -> dict[str, Any]:
+    if not isinstance(events, Mapping):
+        return {}
+    end = events.get("terminated_at")
+    return {"indicators": int(events.get("indicators", 0)),
+            "state_events": int(events.get("state", 0)), "time_events": int(events.get("time", 0)),
+            "event_times": [float(t) for t in events.get("times") or ()],
+            "event_updates": int(events.get("updates", 0)),
+            "terminated_at": None if end is None else float(end),
+            "residual_jump": float(events.get("residual_jump") or 0.0)}
 
 
 def _json_float(value: Any) -> float | None:

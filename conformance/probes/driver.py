@@ -61,7 +61,7 @@ class Driver:
             done = {c for c, _ in self.run.outcome.skipped} | self.run.outcome.run
             self.remaining = [r for r in self.remaining if r.code not in done]
             if result.kind == "end":
-                self.run.skip(self.remaining, "not run: the worker ended early", failed=True)
+                self.run.skip(self.remaining, "the worker ended early", failed=True)
                 return
             if result.kind == "load-failed":
                 self.run.skip(self.remaining, "the binary cannot be loaded (binary-not-loadable)",
@@ -81,7 +81,7 @@ class Driver:
                 return
             restarts += 1
             if restarts > self.limits.max_restarts:
-                self.run.skip(self.remaining, f"not run: the worker was restarted "
+                self.run.skip(self.remaining, f"the worker was restarted "
                               f"{self.limits.max_restarts} times", failed=True)
                 return
 

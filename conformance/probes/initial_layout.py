@@ -19,14 +19,13 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
 
+from ..attributes import declared_nominal
 from ..findings import Location
 from ..model import ModelDescription, Unknown, Variable
-from ..numerics import colouring as col
 from ..runtime.layout import Layout
 from .api import ProbeContext
-from .jacobian_layout import Column, JacobianLayout, Row
+from .jacobian_layout import Column, JacobianLayout, Row, with_pattern
 
 
 def _number(text: str | None) -> float | None:
@@ -113,7 +112,7 @@ def build_initial_layout(ctx: ProbeContext, layout: Layout
     if not rows or not cols:
         return None, mode, {}, ("no scalar Float64 InitialUnknown, or no known that can be set "
                                 "in Initialization Mode, to differentiate")
-    return _with_pattern(rows, cols), mode, start, ""
+    return with_pattern(rows, cols), mode, start, ""
 
 
 def _rows(model: ModelDescription, unknowns: list[Unknown], knowns: set[int]
@@ -125,35 +124,9 @@ def _rows(model: ModelDescription, unknowns: list[Unknown], knowns: set[int]
         if var is None or var.vr is None or var.vr in taken or var.vr in knowns:
             continue
         taken.add(var.vr)
-        nominal = abs(_number(var.nominal) or 0.0)
         out.append((Row(var.vr, var.name, "initial", u.dependencies is not None,
                         Location(file=u.file, line=u.line, path=u.path),
-                        nominal if nominal > 0 else None), u))
+                        declared_nominal(var.nominal)), u))
     return out
 
 
-def _with_pattern(rows: list[tuple[Row, Unknown]], cols: list[Column]) -> JacobianLayout:
-    """The declared sparsity. A dependenciesKind list whose length differs from the
-    dependencies claims no kind: the static rules report it, and a probe finding must never be
-    caused by the XML alone."""
-    index = {c.vr: j for j, c in enumerate(cols)}
-    row_cols: list[list[int]] = []
-    kinds_by_row: list[dict[int, str]] = []
-    for row, u in rows:
-        if not row.explicit:
-            row_cols.append(list(range(len(cols))))
-            kinds_by_row.append({})
-            continue
-        deps = u.dependencies or ()
-        kinds = u.dependencies_kind or ()
-        row_cols.append([index[vr] for vr in deps if vr in index])
-        kinds_by_row.append({index[vr]: k for vr, k in zip(deps, kinds) if vr in index}
-                            if len(kinds) == len(deps) else {})
-    pattern = col.Pattern.from_rows(len(cols), row_cols)
-    kinds = tuple(kinds_by_row[i].get(j, "dependent")
-                  for i, j in zip(pattern.rows.tolist(), pattern.cols.tolist()))
-    # time is a known of the FMU's derivatives only where a dependencies list names it (PD-05)
-    explicit_time = {j for (row, _), cs in zip(rows, row_cols) if row.explicit for j in cs
-                     if cols[j].role == "time"}
-    dd = np.array([c.role != "time" or j in explicit_time for j, c in enumerate(cols)])
-    return JacobianLayout(tuple(r for r, _ in rows), tuple(cols), pattern, kinds, dd)

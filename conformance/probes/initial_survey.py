@@ -62,6 +62,7 @@ class InitialSurvey(Survey):
     instances: int = 0
     budget_stop: str = ""
     fatal: str = ""           # a call returned fmi3Fatal: why the survey stopped
+    interference: str = ""    # the instance kept open lost its values to the others
     # what confirm() needs: the instance factory and what is left of the budget
     factory: Any = field(default=None, repr=False, compare=False)
     counter: Any = field(default=None, repr=False, compare=False)
@@ -246,6 +247,8 @@ def _measure_point(factory: Factory, mode: str, layout: JacobianLayout, point: P
         entries = measure.measure(sources, layout.pattern, colouring, steps, at.x, rng,
                                   method=MEASURING.method, directions=MEASURING.directions,
                                   suspicion=MEASURING.suspicion, ulps=MEASURING.ulps)
+        if at.base is not None and not result.interference:
+            _check_independent(at, entries.f0, point, result)
     except FmiError as exc:
         result.failures.append(("evaluate", point, exc))
         _note_fatal(result, exc)
@@ -254,6 +257,23 @@ def _measure_point(factory: Factory, mode: str, layout: JacobianLayout, point: P
         if at.base is not None:
             at.base.free()
     return PointSurvey(point, at.x, entries)
+
+
+def _check_independent(at: _At, f0: np.ndarray, point: Point, result: InitialSurvey) -> None:
+    """The directional derivatives come from an instance kept open while fresh ones give the
+    function values: if it no longer holds the values a fresh instance computes at its point,
+    the instances share state, its derivatives are taken elsewhere, and no verdict may rest on
+    them (instances-not-independent reports the cause)."""
+    held = np.asarray(at.base.get_float64(at.rows), dtype=float)
+    scale = np.maximum(np.maximum(np.abs(held), np.abs(f0)), 1.0)
+    off = np.abs(held - f0) > 1e-8 * scale
+    if np.any(off):
+        k = int(np.argmax(np.abs(held - f0) / scale))
+        result.interference = (
+            f"the instance kept open at point {point.label} no longer holds its values once "
+            f"other instances were created ({at.layout.rows[k].name}: {held[k]:.9g} instead of "
+            f"{f0[k]:.9g}): the FMU's instances share state (instances-not-independent), so "
+            "its directional derivatives here cannot be judged")
 
 
 def confirm(s: InitialSurvey, ps: PointSurvey, j: int, *, factor: float, ulps: float

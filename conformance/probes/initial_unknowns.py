@@ -146,6 +146,8 @@ def initial_directional_derivative_mismatch(ctx: ProbeContext, *, rtol: float, m
     if not (me and me.flag("providesDirectionalDerivatives")):
         raise ProbeSkipped("the FMU does not provide directional derivatives")
     s = surveyed(ctx)
+    if s.interference:
+        raise ProbeSkipped(s.interference)
     for what, point, exc in s.failures:
         # Not a finding: where the initial problem is singular the derivative does not exist,
         # and the FMU may rightly refuse it (its residuals and dg/dw have rules of their own).

@@ -96,7 +96,7 @@ def build_layout(ctx: ProbeContext) -> tuple[JacobianLayout | None, str]:
     rows = _rows(model, manifest, seen)
     if not rows or not cols:
         return None, "no residuals, derivatives or outputs, or no knowns, to differentiate"
-    return _with_pattern(rows, cols, model), ""
+    return with_pattern(rows, cols), ""
 
 
 def _rows(model: ModelDescription, manifest, knowns: set[int]) -> list[tuple[Row, Unknown]]:
@@ -120,8 +120,11 @@ def _rows(model: ModelDescription, manifest, knowns: set[int]) -> list[tuple[Row
     return out
 
 
-def _with_pattern(rows: list[tuple[Row, Unknown]], cols: list[Column],
-                  model: ModelDescription) -> JacobianLayout:
+def with_pattern(rows: list[tuple[Row, Unknown]], cols: list[Column]) -> JacobianLayout:
+    """The declared sparsity of ``rows`` over ``cols`` and each entry's dependenciesKind. A row
+    without a ``dependencies`` attribute depends on every column; a dependenciesKind list whose
+    length differs from the dependencies claims no kind (the static rules report it, and a
+    probe finding must never be caused by the XML alone)."""
     index = {c.vr: j for j, c in enumerate(cols)}
     row_cols: list[list[int]] = []
     kinds_by_row: list[dict[int, str]] = []
@@ -130,15 +133,16 @@ def _with_pattern(rows: list[tuple[Row, Unknown]], cols: list[Column],
             row_cols.append(list(range(len(cols))))
             kinds_by_row.append({})
             continue
-        kinds = dict(zip(u.dependencies or (), u.dependencies_kind or ()))
-        listed = [index[vr] for vr in (u.dependencies or ()) if vr in index]
-        row_cols.append(listed)
-        kinds_by_row.append({index[vr]: k for vr, k in kinds.items() if vr in index})
+        deps = u.dependencies or ()
+        kinds = u.dependencies_kind or ()
+        row_cols.append([index[vr] for vr in deps if vr in index])
+        kinds_by_row.append({index[vr]: k for vr, k in zip(deps, kinds) if vr in index}
+                            if len(kinds) == len(deps) else {})
     pattern = col.Pattern.from_rows(len(cols), row_cols)
-    kinds = tuple(kinds_by_row[i].get(j, "dependent")
-                  for i, j in zip(pattern.rows.tolist(), pattern.cols.tolist()))
+    kinds_of = tuple(kinds_by_row[i].get(j, "dependent")
+                     for i, j in zip(pattern.rows.tolist(), pattern.cols.tolist()))
     # Time is a known of the FMU's derivatives only where a dependencies list names it (PD-05).
     explicit_time = {j for (row, _), cs in zip(rows, row_cols) if row.explicit for j in cs
                      if cols[j].role == "time"}
     dd = np.array([c.role != "time" or j in explicit_time for j, c in enumerate(cols)])
-    return JacobianLayout(tuple(r for r, _ in rows), tuple(cols), pattern, kinds, dd)
+    return JacobianLayout(tuple(r for r, _ in rows), tuple(cols), pattern, kinds_of, dd)

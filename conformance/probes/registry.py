@@ -8,7 +8,8 @@ from __future__ import annotations
 
 from typing import Mapping
 
-from . import basic, derivatives, dgdw, endurance, handshake, initial_unknowns, simulation
+from . import (basic, derivatives, dgdw, endurance, event_indicators, handshake,
+               importer_paths, initial_unknowns, simulation)
 from .api import Probe
 
 PROBES: dict[str, Probe] = {}
@@ -26,5 +27,7 @@ register(basic.PROBES)
 register(derivatives.PROBES)
 register(dgdw.PROBES)
 register(simulation.PROBES)
+register(importer_paths.PROBES)
+register(event_indicators.PROBES)
 register(initial_unknowns.PROBES)
 register(endurance.PROBES)

@@ -57,7 +57,7 @@ def run(ctx: ProbeContext, mode: str) -> Trajectory:
         if mode == "ode" and settings_of(ctx).mode == "both":
             dae = run(ctx, "dae")
             if not dae.ok:
-                raise ProbeSkipped(f"not run: the DAE-mode run ended early at t = "
+                raise ProbeSkipped(f"the DAE-mode run ended early at t = "
                                    f"{dae.t_end:.9g} ({dae.status})")
         traj = simulate_mode(ctx, mode)
         ctx.facts.setdefault("simulation.runs", {})[mode] = traj

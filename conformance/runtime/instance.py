@@ -47,6 +47,19 @@ class PointNotSet(Unavailable):
         self.point, self.error = point, error
 
 
+class DiscreteStates(NamedTuple):
+    """What fmi3UpdateDiscreteStates returned: discreteStatesNeedUpdate, terminateSimulation,
+    nominalsOfContinuousStatesChanged, valuesOfContinuousStatesChanged, and nextEventTime
+    (None when nextEventTimeDefined is false); ``calls``: how many calls gave it."""
+
+    needs_update: bool
+    terminate: bool
+    nominals_changed: bool
+    values_changed: bool
+    next_time: float | None
+    calls: int = 1
+
+
 def _vrs(values: Sequence[int]) -> Any:
     return (ctypes.c_uint * len(values))(*values)
 
@@ -59,7 +72,8 @@ class Instance:
     """One FMU instance, driven by value reference; the Evaluator once in Continuous-Time Mode.
 
     ``mode`` is the mode it was started in ("dae" or "ode"); ``calls`` counts its FMI calls;
-    ``started`` says how DAE mode was reached ("configuration" or "runtime-switch").
+    ``started`` says how DAE mode was reached ("configuration" or "runtime-switch");
+    ``discrete`` is what the event update after initialisation said (nextEventTime...).
     """
 
     def __init__(self, library: Library, *, name: str):
@@ -73,6 +87,7 @@ class Instance:
         self.calls = 0
         self.initialised = False
         self.initializing = False    # in Initialization Mode, where fmi3Terminate is not allowed
+        self.discrete: DiscreteStates | None = None   # the update that ended initialisation
         self._callback = fmi3LogMessageCallback(library.logger(name))  # kept alive here
         fmu = library.fmu
         self.component = self._fmi(
@@ -106,15 +121,24 @@ class Instance:
         self._fmi("fmi3ExitInitializationMode")
         self.initializing = False
 
-    def update_discrete_states(self) -> None:
-        """fmi3UpdateDiscreteStates until no further update is needed (at most 10 times)."""
+    def update_discrete_states(self) -> DiscreteStates:
+        """fmi3UpdateDiscreteStates until no further update is needed or the FMU asks to
+        terminate (at most 10 times); what the last call said, with the number of calls."""
+        for calls in range(1, 11):
+            update = self.update_discrete_states_once()
+            if not update.needs_update or update.terminate:
+                break
+        return update._replace(calls=calls)
+
+    def update_discrete_states_once(self) -> DiscreteStates:
+        """One fmi3UpdateDiscreteStates: its flags and nextEventTime (None when not defined)."""
         flags = [ctypes.c_bool() for _ in range(5)]
         next_time = ctypes.c_double()
-        for _ in range(10):
-            self._fmi("fmi3UpdateDiscreteStates", *(ctypes.byref(f) for f in flags),
-                      ctypes.byref(next_time))
-            if not flags[0].value:
-                break
+        self._fmi("fmi3UpdateDiscreteStates", *(ctypes.byref(f) for f in flags),
+                  ctypes.byref(next_time))
+        needs, terminate, nominals, values, defined = (bool(f.value) for f in flags)
+        return DiscreteStates(needs, terminate, nominals, values,
+                              float(next_time.value) if defined else None)
 
     def enter_continuous_time_mode(self) -> None:
         self._fmi("fmi3EnterContinuousTimeMode")
@@ -188,6 +212,19 @@ class Instance:
         out = np.zeros(n)
         self._fmi("fmi3GetContinuousStateDerivatives",
                   out.ctypes.data_as(ctypes.POINTER(ctypes.c_double)), n)
+        return out
+
+    def number_of_event_indicators(self) -> int:
+        """fmi3GetNumberOfEventIndicators."""
+        count = ctypes.c_size_t()
+        self._fmi("fmi3GetNumberOfEventIndicators", ctypes.byref(count))
+        return int(count.value)
+
+    def get_event_indicators(self, n: int) -> np.ndarray:
+        """fmi3GetEventIndicators for ``n`` indicators (the FMU checks ``n``)."""
+        out = np.zeros(n)
+        self._fmi("fmi3GetEventIndicators", out.ctypes.data_as(ctypes.POINTER(ctypes.c_double)),
+                  n)
         return out
 
     # -- the Evaluator -------------------------------------------------------------------

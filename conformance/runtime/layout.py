@@ -49,6 +49,10 @@ class Layout:
     ignored: tuple[str, ...] = ()
     provides_directional: bool = False
     provides_adjoint: bool = False
+    # <EventIndicator> value references in document order (the fmi3GetEventIndicators vector):
+    # DAE mode from the manifest, falling back to modelDescription's like the outputs
+    event_indicators: tuple[int, ...] = ()
+    ode_event_indicators: tuple[int, ...] = ()
 
     def states_for(self, mode: str) -> tuple[int, ...]:
         return self.states if mode == "dae" else self.ode_states
@@ -58,6 +62,9 @@ class Layout:
 
     def outputs_for(self, mode: str) -> tuple[int, ...]:
         return self.outputs if mode == "dae" else self.ode_outputs
+
+    def event_indicators_for(self, mode: str) -> tuple[int, ...]:
+        return self.event_indicators if mode == "dae" else self.ode_event_indicators
 
     def name(self, vr: int) -> str:
         return self.names.get(vr, f"vr {vr}")
@@ -96,6 +103,8 @@ class Layout:
         states, ders = derivative_pairs(ms_csd) if ms_csd else (ode_states, ode_ders)
         md_outputs = [u.vr for u in model.unknowns("Output")]
         ms_outputs = [u.vr for u in manifest.unknowns("Output")] if manifest else []
+        md_indicators = [u.vr for u in model.unknowns("EventIndicator")]
+        ms_indicators = [u.vr for u in manifest.unknowns("EventIndicator")] if manifest else []
         enable, status, tunable = _enable(model, manifest)
         me = model.model_exchange
         names, nominal, bounds, start = {}, {}, {}, {}
@@ -128,6 +137,8 @@ class Layout:
             ignored=tuple(dict.fromkeys(ignored)),
             provides_directional=bool(me and me.flag("providesDirectionalDerivatives")),
             provides_adjoint=bool(me and me.flag("providesAdjointDerivatives")),
+            event_indicators=usable(ms_indicators or md_indicators),
+            ode_event_indicators=usable(md_indicators),
         )
 
 

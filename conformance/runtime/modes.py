@@ -99,7 +99,7 @@ def start_instance(library: Library, mode: str, *, runtime_switch: bool = True,
             inst.exit_initialization_mode()
             reconfigure(inst, True)
             inst.started = "runtime-switch"
-        inst.update_discrete_states()
+        inst.discrete = inst.update_discrete_states()
         inst.enter_continuous_time_mode()
     except BaseException:
         try:

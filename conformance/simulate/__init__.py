@@ -1,11 +1,13 @@
 """Simulation of an fmi-ls-dae FMU instance: DAE mode with IDA, ODE mode with CVODE.
 
     integrate.py  simulate_instance: one run of an instance in its mode (the public function)
-    system.py     the FMU as a DAE residual or an ODE right-hand side, with coloured Jacobians
+    system.py     the FMU as a DAE residual or an ODE right-hand side, with coloured Jacobians,
+                  event indicators and the event calls
     output.py     the CSV file of a trajectory
 
 The integrators, their settings and limits, and the comparison of two runs are plain numerics
-(``conformance.numerics``: settings, limits, dae, ode, compare), tested without a binary. The
+(``conformance.numerics``: settings, limits, events, dae, ode, compare), tested without a
+binary. The
 simulation probes (``conformance.probes.simulation``) call
 :func:`~conformance.simulate.integrate.simulate_instance` inside the worker process; the
 ``lsdae simulate`` command (``conformance.simulate_command``) runs those probes through the

@@ -1,8 +1,10 @@
 """Integrate one FMU instance: the public function of the simulation, for the probes and benchmarks.
 
 :func:`simulate_instance` takes an instance already in Continuous-Time Mode in DAE mode (IDA on
-the residuals, with the FMU's coloured Jacobian) or ODE mode (CVODE on the derivatives) and
-returns the :class:`~conformance.numerics.settings.Trajectory`. The instance is the caller's to
+the residuals, with the FMU's coloured Jacobian) or ODE mode (CVODE on the derivatives), through
+the FMU's events (state events on its event indicators, the time events its event updates
+schedule, from the one that ended initialisation on: ``inst.discrete``), and returns the
+:class:`~conformance.numerics.settings.Trajectory`. The instance is the caller's to
 free. Whether a run makes sense (a square DAE, states to integrate) is the caller's to decide.
 """
 from __future__ import annotations
@@ -27,13 +29,15 @@ def simulate_instance(inst: Instance, layout: Layout, settings: Settings, *, sta
     if inst.mode == "dae":
         system = FmuDae(inst, layout, manifest)
         y0 = inst.get_float64([*system.states, *system.algebraic])
-        traj = integrate_dae(system, settings, t0=start, y0=y0, stop=stop)
-        traj.residual_along = residual_along(inst, layout, traj)
+        traj = integrate_dae(system, settings, t0=start, y0=y0, stop=stop,
+                             start_update=inst.discrete)
+        if not traj.has_events:  # after events the discrete state no longer fits early times
+            traj.residual_along = residual_along(inst, layout, traj)
         return traj
     ode = FmuOde(inst, layout, model)
     nominal = np.array([layout.scale(vr) for vr in ode.algebraic])
     return integrate_ode(ode, settings, t0=start, x0=inst.get_float64(ode.states), stop=stop,
-                         algebraic_nominal=nominal)
+                         algebraic_nominal=nominal, start_update=inst.discrete)
 
 
 def residual_along(inst: Instance, layout: Layout, traj: Trajectory) -> dict[str, Any]:

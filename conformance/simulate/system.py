@@ -15,10 +15,17 @@ ContinuousStateDerivative dependencies. The algebraic variables are read at the 
 A call that returns fmi3Discard, or non-finite values, is an
 :class:`~conformance.numerics.limits.EvaluationFailed` the integrator may recover from by a
 smaller step; fmi3Error and fmi3Fatal are not recoverable.
+
+Both are :class:`~conformance.numerics.events.EventSystem` s when the FMU lists event indicators
+(``indicator_names``; in DAE mode the manifest's, else modelDescription's): the indicators are
+read with fmi3GetEventIndicators after setting t, the states (and w), and an event runs
+fmi3EnterEventMode at the values of the event, fmi3UpdateDiscreteStates (one call each time the
+event loop in ``numerics/events.py`` asks), fmi3EnterContinuousTimeMode and
+fmi3GetContinuousStates. An FMU without event indicators sees none of these calls.
 """
 from __future__ import annotations
 
-from typing import Iterable, Sequence
+from typing import Any, Iterable, Sequence
 
 import numpy as np
 
@@ -26,6 +33,7 @@ from ..numerics import colouring as col
 from ..numerics import numdiff
 from ..numerics.limits import EvaluationFailed
 from ..runtime.errors import FmiError
+from ..runtime.instance import DiscreteStates
 
 DIRECTIONAL, FINITE_DIFFERENCES = "directional derivatives", "finite differences"
 
@@ -82,7 +90,60 @@ class _Coloured:
         return jac
 
 
-class FmuDae:
+class _Events:
+    """The event side of an instance (numerics.events.EventSystem); ``y`` starts with the
+    ``nx`` states. The subclass's ``_set`` sets (t, y) and remembers it in ``_set_at``."""
+
+    inst: Any
+    nx: int
+    indicator_names: list[str]
+    _set_at: tuple[float, bytes] | None
+
+    def _set(self, t: float, y: np.ndarray) -> None: ...
+
+    def indicators(self, t: float, y: np.ndarray) -> np.ndarray:
+        try:
+            self._set(t, y)
+            return self.inst.get_event_indicators(len(self.indicator_names))
+        except FmiError as exc:
+            self._set_at = None
+            raise _failed(exc) from None
+
+    def enter_event_mode(self, t: float, y: np.ndarray) -> None:
+        try:
+            self._set(t, y)
+            self._set_at = None  # the event may change what (t, y) gives: set it again after
+            self.inst.enter_event_mode()
+        except FmiError as exc:
+            raise _fatal(exc) from None
+
+    def update_discrete_states(self) -> DiscreteStates:
+        try:
+            return self.inst.update_discrete_states_once()
+        except FmiError as exc:
+            raise _fatal(exc) from None
+
+    def enter_continuous_time_mode(self) -> None:
+        try:
+            self.inst.enter_continuous_time_mode()
+        except FmiError as exc:
+            raise _fatal(exc) from None
+
+    def read_states(self, y: np.ndarray) -> np.ndarray:
+        out = np.array(y, dtype=float)
+        try:
+            out[:self.nx] = self.inst.get_states(self.nx)
+        except FmiError as exc:
+            raise _fatal(exc) from None
+        return out
+
+
+def _fatal(exc: FmiError) -> EvaluationFailed:
+    """A failed call at an event: no smaller step gets past it."""
+    return EvaluationFailed(exc.call, exc.status, exc.log, recoverable=False)
+
+
+class FmuDae(_Events):
     """``F = [f; g]`` of an instance in DAE mode, with ``y = [x; w]`` (see numerics.consistent.DaeSystem)."""
 
     def __init__(self, inst, layout, manifest, *, use_directional: bool = True):
@@ -100,6 +161,7 @@ class FmuDae:
         self.jac = _Coloured(inst, [*self.derivatives, *self.residuals], cols, pattern,
                              self.nominal, use_directional and layout.provides_directional)
         self.jacobian_source = self.jac.source
+        self.indicator_names = [layout.name(vr) for vr in layout.event_indicators]
         self._set_at: tuple[float, bytes] | None = None
 
     @property
@@ -138,7 +200,7 @@ class FmuDae:
             raise _failed(exc) from None
 
 
-class FmuOde:
+class FmuOde(_Events):
     """``x' = f(t, x)`` of an instance in ODE mode (see ode.OdeSystem)."""
 
     def __init__(self, inst, layout, model, *, use_directional: bool = True):
@@ -154,6 +216,7 @@ class FmuOde:
         self.jac = _Coloured(inst, self.derivatives, self.states, pattern, self.nominal,
                              use_directional and layout.provides_directional)
         self.jacobian_source = self.jac.source
+        self.indicator_names = [layout.name(vr) for vr in layout.ode_event_indicators]
         self._set_at: tuple[float, bytes] | None = None
         self._algebraic_readable = True
 

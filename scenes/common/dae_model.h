@@ -15,6 +15,9 @@
  * (the same derivatives, only the structural nonzeros).  Everything else (state machine, Newton solver for ODE mode,
  * total derivatives, directional/adjoint derivatives) is in the framework.
  *
+ * Optionally (all zero / NULL by default, so a model without events compiles unchanged) a
+ * model has discrete variables d, event indicators z and an event hook; see "Events" below.
+ *
  * Deliberately defective variants are built by compiling with -DDEFECT_xxx;
  * put the defect into model.c (or the framework) inside #ifdef DEFECT_xxx.
  */
@@ -24,7 +27,7 @@
 #include "fmi3Functions.h"
 
 /* Capacity of the value-reference, start and nominal tables of ModelDef below, i.e. the
- * largest nx, nw, nu, ny; a scalable scene (Chain) raises it with -DFMU_MAX_VARS=....
+ * largest nx, nw, nu, ny, nd, nz; a scalable scene (Chain) raises it with -DFMU_MAX_VARS=....
  * The framework sizes its own work arrays from nx, nw, nu, ny and keeps them on the heap. */
 #ifndef FMU_MAX_VARS
 #define FMU_MAX_VARS 8
@@ -74,6 +77,48 @@ typedef int (*ModelPatternFn)(ModelEntry entries[]);
 typedef void (*ModelPartialsSparseFn)(double t, const double x[], const double w[],
                                       const double u[], double values[]);
 
+/*
+ * Events (optional).
+ *
+ * d are discrete Float64 variables (causality local, variability discrete, initial
+ * calculated): the FMU changes them, only in fmi3UpdateDiscreteStates; they start at d_start
+ * (and again after fmi3Reset), are saved with the FMU state, are read with fmi3GetFloat64 and
+ * cannot be set.  A model whose equations use d gives `eval_discrete` / `partials_discrete`
+ * (eval / partials with d as an extra argument) instead of `eval` / `partials`; d is never a
+ * known of the partial derivatives.
+ *
+ * z are the event indicators (Float64 variables, causality local or output, variability
+ * continuous, listed as <EventIndicator> in the ModelStructure, in the order of vr_z).
+ * `indicators` computes them from (t, x, w, u, d): in ODE mode from the w the FMU solved, in
+ * DAE mode from the w the importer set.  fmi3GetEventIndicators returns them in
+ * Initialization, Event and Continuous-Time Mode (and Terminated); fmi3GetFloat64 of vr_z[i]
+ * gives the same values.
+ *
+ * `event` (optional) runs in every fmi3UpdateDiscreteStates: it may change d (a mode flag the
+ * residuals use, so a state event can change a residual), and x (a re-initialisation), ask
+ * to end the simulation, and announce the next time event.  The framework compares d and x
+ * before and after the call: a change of d makes fmi3UpdateDiscreteStates report
+ * discreteStatesNeedUpdate (the importer calls it again; the hook must reach a fixed point),
+ * a change of x valuesOfContinuousStatesChanged; in ODE mode w is then solved again.  Within
+ * the hook, w is the FMU's solved w (ODE mode) or the importer's (DAE mode).
+ */
+typedef void (*ModelEvalDiscreteFn)(double t, const double x[], const double w[],
+                                    const double u[], const double d[], double der[],
+                                    double res[], double y[]);
+typedef void (*ModelPartialsDiscreteFn)(double t, const double x[], const double w[],
+                                        const double u[], const double d[], double J[]);
+typedef void (*ModelIndicatorsFn)(double t, const double x[], const double w[],
+                                  const double u[], const double d[], double z[]);
+
+typedef struct {
+    fmi3Boolean terminate;          /* end the simulation (terminateSimulation) */
+    fmi3Boolean next_time_defined;  /* a time event is due at next_time */
+    double      next_time;
+} ModelEvent;                       /* zeroed by the framework before each call */
+
+typedef void (*ModelEventFn)(double t, double x[], const double w[], const double u[],
+                             double d[], ModelEvent *event);
+
 typedef struct {
     int nx;  /* continuous states x (and their derivatives) */
     int nw;  /* algebraic variables w; also the number of residuals */
@@ -102,6 +147,17 @@ typedef struct {
 
     ModelPatternFn        pattern;            /* optional: the sparse interface above */
     ModelPartialsSparseFn partials_sparse;
+
+    /* Events (optional, see "Events" above; a dense model only) */
+    int nd;                                   /* discrete variables d */
+    int nz;                                   /* event indicators z */
+    fmi3ValueReference vr_d[FMU_MAX_VARS];
+    fmi3ValueReference vr_z[FMU_MAX_VARS];
+    double d_start[FMU_MAX_VARS];
+    ModelEvalDiscreteFn     eval_discrete;    /* replaces eval when set */
+    ModelPartialsDiscreteFn partials_discrete;/* replaces partials when set */
+    ModelIndicatorsFn       indicators;       /* required when nz > 0 */
+    ModelEventFn            event;            /* run in fmi3UpdateDiscreteStates */
 } ModelDef;
 
 extern const ModelDef MODEL;

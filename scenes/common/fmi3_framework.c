@@ -12,6 +12,11 @@
  * derivatives are the partials with w as a known and residuals as unknowns.
  * Initialization Mode solves g = 0 in both modes (w are initial unknowns).
  *
+ * Events (models that declare them, see dae_model.h): the event indicators z are computed
+ * with der, res and y, from the current (t, x, w, u, d); fmi3UpdateDiscreteStates runs the
+ * model's event hook, which may change the discrete variables d (and x) and announce the
+ * next time event.  A model without events has nz = nd = 0 and behaves as before.
+ *
  * Every work array is allocated on the heap at instantiation, sized from the
  * model.  The model's Jacobian is kept as a list of entries: its declared
  * pattern (sparse models, see dae_model.h) or every entry (dense models).
@@ -47,6 +52,12 @@
  *                                  and its derivatives agree; the XML does not say so)
  *   DEFECT_INITIAL_DIRECTIONAL     Initialization Mode, DAE mode: the directional derivative of
  *                                  w drops the sign of -(dg/dw)^-1 dg/dk
+ * and for the importer-path probes (tests/fixtures/defects/importers.py):
+ *   DEFECT_STATE_SET_IGNORED       fmi3SetFloat64 on a state returns fmi3OK in Continuous-Time Mode
+ *                                  but keeps the old value
+ *   DEFECT_STATE_SET_REFUSED       fmi3SetFloat64 on a state returns fmi3Error in Continuous-Time Mode
+ *   DEFECT_INDICATORS_STALE        event indicators computed from the previous evaluation's w
+ *   DEFECT_INDICATOR_COUNT         fmi3GetNumberOfEventIndicators says one more than there are
  * and for the simulation probes (tests/fixtures/defects/simulation.py), only for t > 0.5:
  *   DEFECT_LATE_JUMP               res[0] jumps by 1 (no event indicator)
  *   DEFECT_LATE_FAST               der[0] gains 1e5 cos(1e5 t)
@@ -76,9 +87,11 @@
 #define NW        MODEL.nw
 #define NU        MODEL.nu
 #define NY        MODEL.ny
+#define ND        MODEL.nd
+#define NZ        MODEL.nz
 #define NROWS     (NX + NW + NY)          /* rows der, res, y of the model's Jacobian */
 #define NCOLS     (NX + NW + NU + 1)      /* columns x, w, u, t */
-#define NVALUES   (2 * NX + 2 * NW + NU + NY)
+#define NVALUES   (2 * NX + 2 * NW + NU + NY + NZ + ND)
 #define MAX_BLOCKS 40
 
 typedef enum {
@@ -107,7 +120,7 @@ typedef struct {
 
 typedef struct {
     Data d;
-    double vals[];     /* x, w, u, der, res, y */
+    double vals[];     /* x, w, u, der, res, y, z, d */
 } SavedState;
 
 typedef struct {
@@ -123,6 +136,11 @@ typedef struct {
 typedef struct {
     Data d;
     double *vals, *x, *w, *u, *der, *res, *y;
+    double *ind, *disc;                /* event indicators z, discrete variables d */
+    double *xsave, *dsave;             /* x and d before the event hook */
+#ifdef DEFECT_INDICATORS_STALE
+    double *wlast;                     /* the w of the previous evaluation */
+#endif
 
     /* the model's Jacobian: pattern and values at the last evaluation */
     int nnz;
@@ -161,7 +179,7 @@ typedef struct {
     fmi3Boolean logging;
 } Instance;
 
-enum { K_NONE, K_TIME, K_ENABLE, K_X, K_DER, K_W, K_RES, K_U, K_Y };
+enum { K_NONE, K_TIME, K_ENABLE, K_X, K_DER, K_W, K_RES, K_U, K_Y, K_Z, K_D };
 
 /* ------------------------------------------------------------------ helpers */
 
@@ -272,6 +290,8 @@ static void build_index(Instance *c) {
     for (i = 0; i < NW; i++) { index_add(c, MODEL.vr_w[i], K_W, i); index_add(c, MODEL.vr_res[i], K_RES, i); }
     for (i = 0; i < NU; i++) index_add(c, MODEL.vr_u[i], K_U, i);
     for (i = 0; i < NY; i++) index_add(c, MODEL.vr_y[i], K_Y, i);
+    for (i = 0; i < NZ; i++) index_add(c, MODEL.vr_z[i], K_Z, i);
+    for (i = 0; i < ND; i++) index_add(c, MODEL.vr_d[i], K_D, i);
     qsort(c->index, (size_t)c->nindex, sizeof *c->index, compare_vr);
     c->vr_min = c->index[0].vr;
     c->vr_span = c->index[c->nindex - 1].vr - c->vr_min + 1;
@@ -309,6 +329,8 @@ static double *slot(Instance *c, int kind, int i) {
     case K_RES:  return &c->res[i];
     case K_U:    return &c->u[i];
     case K_Y:    return &c->y[i];
+    case K_Z:    return &c->ind[i];
+    case K_D:    return &c->disc[i];
     default:     return NULL;
     }
 }
@@ -325,6 +347,7 @@ static void reset_data(Instance *c) {
     memcpy(c->x, MODEL.x_start, sizeof(double) * (size_t)NX);
     memcpy(c->w, MODEL.w_start, sizeof(double) * (size_t)NW);
     memcpy(c->u, MODEL.u_start, sizeof(double) * (size_t)NU);
+    memcpy(c->disc, MODEL.d_start, sizeof(double) * (size_t)ND);
 }
 
 static void changed(Data *d) { d->w_consistent = 0; d->eval_valid = 0; }
@@ -335,13 +358,19 @@ static int fmu_computes_w(const Instance *c) {
 }
 
 static void eval_at(const Instance *c, const double w[], double der[], double res[], double y[]) {
-    MODEL.eval(c->d.t, c->x, w, c->u, der, res, y);
+    if (MODEL.eval_discrete) MODEL.eval_discrete(c->d.t, c->x, w, c->u, c->disc, der, res, y);
+    else                     MODEL.eval(c->d.t, c->x, w, c->u, der, res, y);
 #ifdef DEFECT_LATE_JUMP
     if (c->d.t > 0.5 && NW > 0) res[0] += 1.0;
 #endif
 #ifdef DEFECT_LATE_FAST
     if (c->d.t > 0.5 && NX > 0) der[0] += 1e5 * cos(1e5 * c->d.t);
 #endif
+}
+
+/* The event indicators at (t, x, w, u, d) into ind. */
+static void indicators_at(const Instance *c, const double w[]) {
+    MODEL.indicators(c->d.t, c->x, w, c->u, c->disc, c->ind);
 }
 
 /* The residuals the Newton iteration drives to zero (ODE mode and initialisation). */
@@ -366,6 +395,8 @@ static void eval_solved(const Instance *c, const double w[], double der[], doubl
 static void partials_at(Instance *c, const double w[]) {
     memset(c->pval, 0, sizeof(double) * (size_t)c->nnz);
     if (MODEL.pattern) MODEL.partials_sparse(c->d.t, c->x, w, c->u, c->pval);
+    else if (MODEL.partials_discrete)
+        MODEL.partials_discrete(c->d.t, c->x, w, c->u, c->disc, c->pval);
     else               MODEL.partials(c->d.t, c->x, w, c->u, c->pval);
 }
 
@@ -394,7 +425,7 @@ static int load_pattern(Instance *c) {
             if (e->kind == fmi3Independent) e->kind = fmi3Dependent;
         }
     } else {
-        if (!MODEL.partials) {
+        if (!MODEL.partials && !MODEL.partials_discrete) {
             logmsg(c, fmi3Error, "the model has neither partials nor a pattern");
             return 0;
         }
@@ -559,6 +590,12 @@ static fmi3Status update(Instance *c) {
     }
     if (!d->eval_valid) {
         eval_at(c, c->w, c->der, c->res, c->y);
+#ifdef DEFECT_INDICATORS_STALE
+        if (NZ > 0) indicators_at(c, c->wlast);   /* a cache keyed on t and x only */
+        memcpy(c->wlast, c->w, sizeof(double) * (size_t)NW);
+#else
+        if (NZ > 0) indicators_at(c, c->w);
+#endif
         if (discard_reason) return discarded(c);
         d->eval_valid = 1;
     }
@@ -893,8 +930,8 @@ fmi3Status fmi3GetVariableDependencies(fmi3Instance instance, fmi3ValueReference
 static int allocate(Instance *c) {
     const size_t rows = (size_t)NROWS, cols = (size_t)NCOLS, nw = (size_t)NW;
     c->vals = (double *)grab(c, (size_t)NVALUES, sizeof(double));
-    c->index = (VrEntry *)grab(c, 2 + 2 * (size_t)NX + 2 * nw + (size_t)NU + (size_t)NY,
-                               sizeof(VrEntry));
+    c->index = (VrEntry *)grab(c, 2 + 2 * (size_t)NX + 2 * nw + (size_t)NU + (size_t)NY
+                               + (size_t)NZ + (size_t)ND, sizeof(VrEntry));
     if (c->alloc_failed || !load_pattern(c)) return 0;
     c->x = c->vals;
     c->w = c->x + NX;
@@ -905,6 +942,8 @@ static int allocate(Instance *c) {
 #ifdef DEFECT_GLOBAL_STATE
     c->x = global_x;
 #endif
+    c->ind = c->y + NY;
+    c->disc = c->ind + NZ;
     build_index(c);
     c->pval = (double *)grab(c, (size_t)c->nnz, sizeof(double));
     c->ab = (double *)grab(c, nw * (size_t)c->bw, sizeof(double));
@@ -924,6 +963,11 @@ static int allocate(Instance *c) {
     c->dw = (double *)grab(c, nw, sizeof(double));
     c->nder = (double *)grab(c, (size_t)NX, sizeof(double));
     c->ny = (double *)grab(c, (size_t)NY, sizeof(double));
+    c->xsave = (double *)grab(c, (size_t)NX, sizeof(double));
+    c->dsave = (double *)grab(c, (size_t)ND, sizeof(double));
+#ifdef DEFECT_INDICATORS_STALE
+    c->wlast = (double *)grab(c, nw, sizeof(double));
+#endif
     if (c->alloc_failed) return 0;
     return !MODEL.pattern || build_structure(c);
 }
@@ -977,7 +1021,14 @@ fmi3Instance fmi3InstantiateModelExchange(fmi3String instanceName, fmi3String in
                                    "fmi3InstantiateModelExchange: wrong instantiationToken");
         return NULL;
     }
-    if (NX > NMAX || NW > NMAX || NU > NMAX || NY > NMAX) return NULL;  /* tables overflow */
+    if (NX > NMAX || NW > NMAX || NU > NMAX || NY > NMAX || ND > NMAX || NZ > NMAX)
+        return NULL;                                                  /* tables overflow */
+    if (NZ < 0 || ND < 0 || (NZ > 0 && !MODEL.indicators)) {
+        if (logMessage) logMessage(instanceEnvironment, fmi3Error, "logStatusError",
+                                   "fmi3InstantiateModelExchange: event indicators without "
+                                   "an indicators function");
+        return NULL;
+    }
     c = (Instance *)calloc(1, sizeof *c);
     if (!c) return NULL;
     c->name = (char *)malloc(strlen(instanceName) + 1);
@@ -1144,7 +1195,7 @@ fmi3Status fmi3GetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], 
     for (k = 0; k < nvr; k++) {
         int kind = lookup(c, vr[k], &idx);
         if (!slot(c, kind, idx)) FAIL("fmi3GetFloat64: no Float64 variable %u", (unsigned)vr[k]);
-        computed |= kind == K_DER || kind == K_RES || kind == K_Y || kind == K_W;
+        computed |= kind == K_DER || kind == K_RES || kind == K_Y || kind == K_W || kind == K_Z;
 #ifdef DEFECT_SEGFAULT_GETFLOAT64
         if (kind == K_RES && c->d.state == ContinuousTimeMode) {
             double *volatile missing = NULL;   /* a buffer that was never allocated */
@@ -1173,7 +1224,11 @@ static int may_set(const Instance *c, int kind) {
     const Data *d = &c->d;
     const int running = InitializationMode | EventMode | ContinuousTimeMode;
     switch (kind) {
+#ifdef DEFECT_STATE_SET_REFUSED
+    case K_X: return (d->state & (Instantiated | InitializationMode | EventMode)) != 0;
+#else
     case K_X:
+#endif
     case K_U: return (d->state & (Instantiated | running)) != 0;
 #ifdef DEFECT_W_NOT_SETTABLE
     case K_W: return d->state == Instantiated ||
@@ -1201,6 +1256,9 @@ fmi3Status fmi3SetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], 
     }
     for (k = 0; k < nvr; k++) {
         int kind = lookup(c, vr[k], &idx);
+#ifdef DEFECT_STATE_SET_IGNORED
+        if (kind == K_X && c->d.state == ContinuousTimeMode) continue;   /* "accepted" */
+#endif
         *slot(c, kind, idx) = values[k];
     }
     if (nvr) changed(&c->d);
@@ -1302,13 +1360,33 @@ fmi3Status fmi3UpdateDiscreteStates(fmi3Instance instance, fmi3Boolean *discrete
         fmi3Boolean *terminateSimulation, fmi3Boolean *nominalsOfContinuousStatesChanged,
         fmi3Boolean *valuesOfContinuousStatesChanged, fmi3Boolean *nextEventTimeDefined,
         fmi3Float64 *nextEventTime) {
+    ModelEvent ev;
+    int i, d_changed = 0, x_changed = 0;
+    fmi3Status status;
     BEGIN("fmi3UpdateDiscreteStates", EventMode);
-    if (discreteStatesNeedUpdate) *discreteStatesNeedUpdate = fmi3False;
-    if (terminateSimulation) *terminateSimulation = fmi3False;
+    memset(&ev, 0, sizeof ev);
+    if (MODEL.event) {
+        /* the hook sees the w the FMU solved (ODE mode) or the importer set (DAE mode) */
+        if ((status = update(c)) != fmi3OK) return status;
+        memcpy(c->xsave, c->x, sizeof(double) * (size_t)NX);
+        memcpy(c->dsave, c->disc, sizeof(double) * (size_t)ND);
+        MODEL.event(c->d.t, c->x, c->w, c->u, c->disc, &ev);
+        for (i = 0; i < ND; i++) d_changed |= c->disc[i] != c->dsave[i];
+        for (i = 0; i < NX; i++) x_changed |= c->x[i] != c->xsave[i];
+        if (d_changed || x_changed) {
+            changed(&c->d);
+            logmsg(c, fmi3OK, "t=%g: event%s%s", c->d.t, d_changed ? ", discrete variables "
+                   "changed" : "", x_changed ? ", states re-initialised" : "");
+        }
+    }
+    if (discreteStatesNeedUpdate) *discreteStatesNeedUpdate = d_changed ? fmi3True : fmi3False;
+    if (terminateSimulation) *terminateSimulation = ev.terminate ? fmi3True : fmi3False;
     if (nominalsOfContinuousStatesChanged) *nominalsOfContinuousStatesChanged = fmi3False;
-    if (valuesOfContinuousStatesChanged) *valuesOfContinuousStatesChanged = fmi3False;
-    if (nextEventTimeDefined) *nextEventTimeDefined = fmi3False;
-    if (nextEventTime) *nextEventTime = 0.0;
+    if (valuesOfContinuousStatesChanged)
+        *valuesOfContinuousStatesChanged = x_changed ? fmi3True : fmi3False;
+    if (nextEventTimeDefined)
+        *nextEventTimeDefined = ev.next_time_defined ? fmi3True : fmi3False;
+    if (nextEventTime) *nextEventTime = ev.next_time_defined ? ev.next_time : 0.0;
     return fmi3OK;
 }
 
@@ -1376,16 +1454,26 @@ fmi3Status fmi3GetNominalsOfContinuousStates(fmi3Instance instance, fmi3Float64 
 }
 
 fmi3Status fmi3GetEventIndicators(fmi3Instance instance, fmi3Float64 z[], size_t nz) {
+    fmi3Status status;
     BEGIN("fmi3GetEventIndicators", RUNNING);
-    (void)z;
-    if (nz != 0) FAIL("fmi3GetEventIndicators: the model has no event indicators");
+    if (nz != (size_t)NZ || (nz && !z)) {
+        if (NZ == 0) FAIL("fmi3GetEventIndicators: the model has no event indicators");
+        FAIL("fmi3GetEventIndicators: expected %d event indicators", NZ);
+    }
+    if (nz == 0) return fmi3OK;
+    if ((status = update(c)) != fmi3OK) return status;
+    memcpy(z, c->ind, nz * sizeof(double));
     return fmi3OK;
 }
 
 fmi3Status fmi3GetNumberOfEventIndicators(fmi3Instance instance, size_t *n) {
     BEGIN("fmi3GetNumberOfEventIndicators", NOT_CONFIG);
     if (!n) FAIL("fmi3GetNumberOfEventIndicators: NULL argument");
-    *n = 0;
+#ifdef DEFECT_INDICATOR_COUNT
+    *n = (size_t)NZ + 1;   /* counts a removed indicator still */
+#else
+    *n = (size_t)NZ;
+#endif
     return fmi3OK;
 }
 

@@ -13,7 +13,7 @@ SEEDS = range(20)
 
 
 @pytest.mark.parametrize("seed", SEEDS)
-@pytest.mark.parametrize("scene", ["SimpleDAE", "Robertson", "HelloWorldDAE"])
+@pytest.mark.parametrize("scene", ["SimpleDAE", "Robertson", "HelloWorldDAE", "EventDAE"])
 def test_correct_scene_is_clean_with_probes(scene, seed):
     # The simulation probe does not depend on the seed: run it once per scene, not 20 times.
     ignore = () if seed == 0 else ("DAE8",)

@@ -54,6 +54,8 @@ class Scene:
     u_test: list[float] = field(default_factory=list)
     x_alt: list[float] = field(default_factory=list)    # a second point (linearity checks)
     u_alt: list[float] = field(default_factory=list)
+    vr_z: list[int] = field(default_factory=list)       # event indicators
+    vr_d: list[int] = field(default_factory=list)       # discrete variables (f, g, h: at start)
 
     def solve_w(self, x, u, guess=None):
         guess = np.array(self.w0 if guess is None else guess, dtype=float)
@@ -194,6 +196,14 @@ SCENES.update({
         f=fg[0], g=fg[1], h=lambda x, w, u: np.zeros(0),
         x_test=_FB_X_TEST, u_test=[], x_alt=_FB_X_ALT, u_alt=[])
        for name, fg in (("FourBar", _FB_SI), ("FourBarScaled", _FB_SCALED))},
+    # the equations with the discrete variables at their start (k = 1, b = 0); the events
+    # themselves are tested in test_event_scene.py
+    "EventDAE": Scene(
+        "EventDAE", vr_x=[1], vr_der=[2], vr_w=[3], vr_res=[5], vr_u=[], vr_y=[4],
+        vr_enable=9, tunable=True, x0=[1.0], w0=[1.0], x_nominal=[1.0],
+        f=lambda x, w, u: np.array([-w[0]]), g=lambda x, w, u: np.array([w[0] - x[0]]),
+        h=lambda x, w, u: np.array([w[0]]), x_test=[0.8], u_test=[], x_alt=[0.6], u_alt=[],
+        vr_z=[6], vr_d=[7, 8]),
 })
 PARAMS = sorted(SCENES)
 
@@ -408,7 +418,16 @@ def test_variables_match_reference_tables(name):
     assert (en.tag, en.get("causality"), en.get("start")) == \
         ("Boolean", "structuralParameter", "false")
     assert en.get("variability") == ("tunable" if sc.tunable else "fixed")
-    all_vrs = {0, sc.vr_enable, *sc.vr_x, *sc.vr_der, *sc.vr_w, *sc.vr_res, *sc.vr_u, *sc.vr_y}
+    for vr in sc.vr_z:
+        v = var[vr]
+        assert (v.tag, v.get("causality"), v.get("variability"), v.get("start")) == \
+            ("Float64", "local", "continuous", None)
+    for vr in sc.vr_d:
+        v = var[vr]
+        assert (v.tag, v.get("causality"), v.get("variability"), v.get("start")) == \
+            ("Float64", "local", "discrete", None)
+    all_vrs = {0, sc.vr_enable, *sc.vr_x, *sc.vr_der, *sc.vr_w, *sc.vr_res, *sc.vr_u, *sc.vr_y,
+               *sc.vr_z, *sc.vr_d}
     assert set(var) == all_vrs
 
 
@@ -420,8 +439,9 @@ def test_model_structure_lists(name):
     var = _variables(name)
     order = [el.tag for el in root.find("ModelStructure")]
     assert order == sorted(order, key=["Output", "ContinuousStateDerivative",
-                                       "InitialUnknown"].index)
+                                       "InitialUnknown", "EventIndicator"].index)
     assert list(_structure(root, {"Output"})) == sc.vr_y
+    assert list(_structure(root, {"EventIndicator"})) == sc.vr_z
     assert list(_structure(root, {"ContinuousStateDerivative"})) == sc.vr_der
     expected = sorted(
         vr for vr, v in var.items()
@@ -443,8 +463,9 @@ def test_manifest_shape(name):
     assert int(root[0].get("valueReference")) == sc.vr_enable
     assert [int(a.get("valueReference")) for a in root[1]] == sc.vr_w
     order = [el.tag for el in root.find("ModelStructure")]
-    rank = ["Output", "ContinuousStateDerivative", "InitialUnknown", "Residual"]
+    rank = ["Output", "ContinuousStateDerivative", "InitialUnknown", "EventIndicator", "Residual"]
     assert order == sorted(order, key=rank.index)
+    assert list(_structure(root, {"EventIndicator"})) == sc.vr_z
     assert list(_structure(root, {"Residual"})) == sc.vr_res
     assert list(_structure(root, {"Output"})) == sc.vr_y
     assert list(_structure(root, {"ContinuousStateDerivative"})) == sc.vr_der
@@ -525,7 +546,7 @@ def test_start_values_and_counts(make, name):
     np.testing.assert_array_equal(inst.get(sc.vr_w), sc.w0)
     assert inst.fmu.getBoolean([sc.vr_enable]) == [False]
     assert inst.fmu.getNumberOfContinuousStates() == len(sc.vr_x)
-    assert inst.fmu.getNumberOfEventIndicators() == 0
+    assert inst.fmu.getNumberOfEventIndicators() == len(sc.vr_z)
     n = len(sc.vr_x)
     buf = (ctypes.c_double * n)()
     inst.fmu.getNominalsOfContinuousStates(buf, n)
@@ -793,7 +814,8 @@ def test_jacobian_pattern_matches_model_structure(make, name, dae):
         for j, k in enumerate(knowns):
             if k in deps:
                 assert J[i, j] != 0.0, f"d{vr}/d{k} listed but zero"
-                if kinds[deps.index(k)] == "constant":
+                if kinds[deps.index(k)] in ("constant", "fixed", "tunable", "discrete"):
+                    # a factor that changes only with parameters or at events (EventDAE's k)
                     assert J2[i, j] == pytest.approx(J[i, j], rel=1e-12), f"d{vr}/d{k}"
                 else:
                     assert J2[i, j] != pytest.approx(J[i, j], rel=1e-9), \

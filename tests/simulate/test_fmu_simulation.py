@@ -9,7 +9,7 @@ import pytest
 
 from conformance.engine import EngineOptions, check_fmu
 from conformance.findings import thaw
-from conformance.simulate_command import simulate_fmu
+from conformance.simulate_fmu import simulate_fmu
 from scenes.build import build_scene
 from tests.numerics.systems import ROBERTSON_REFERENCE, VAN_DER_POL_IMPASSE
 from tests.simkit import sim_settings

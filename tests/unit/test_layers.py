@@ -18,6 +18,7 @@ FLOORS: list[tuple[str, ...]] = [
     ("__main__",),
     ("cli",),
     ("simulate_command", "check_command", "rules_command", "exit_codes", "parallel"),
+    ("simulate_fmu",),
     ("engine",),
     ("engine_options", "collector"),
     ("checks", "probes"),

@@ -29,7 +29,12 @@ from .fmu import ArchiveLimits, ArchiveReadError, open_fmu
 from .layer import manifest_missing, skip_reason
 from .manifest import MANIFEST, Manifest, read_manifest
 from .model import MODEL_DESCRIPTION, ModelDescription, read_model_description
-from .schemas import validate_manifest, validate_model_description
+from .schemas import (
+    BUILD_DESCRIPTION_FILE,
+    validate_build_description,
+    validate_manifest,
+    validate_model_description,
+)
 from .xmlsafe import parse_xml
 
 log = logging.getLogger(__name__)
@@ -123,6 +128,9 @@ def _run(path: Path, options: EngineOptions, catalogue: Catalogue, selection: Ru
                                  if r.code in selection.enabled and r.stage not in ("archive",))
             return
         manifest = _read_manifest(source, names, options, collector, texts, state, model)
+        if BUILD_DESCRIPTION_FILE in names and not options.probes_only:  # a source FMU
+            build = _read_xml(source, BUILD_DESCRIPTION_FILE, collector, texts)
+            collector.add_stage(validate_build_description(build) if build is not None else ())
         if model is not None:
             state.info.update(model_name=model.model_name, fmi_version=model.fmi_version,
                               variables=len(model.variables))

@@ -13,6 +13,7 @@ from typing import Iterator, Mapping, NamedTuple
 
 from lxml import etree
 
+from .definitions import NO_DEFINITIONS, Definitions, read_definitions
 from .unknowns import Unknown, parse_unknown, parse_vr
 
 MODEL_DESCRIPTION = "modelDescription.xml"
@@ -30,6 +31,7 @@ class Dimension(NamedTuple):
     start: str | None
     vr: int | None
     line: int | None
+    raw_vr: str | None = None     # the attribute text, when it did not parse as a valueReference
 
 
 class Variable(NamedTuple):
@@ -60,6 +62,10 @@ class Variable(NamedTuple):
     previous: int | None = None
     raw_vr: str | None = None     # the attribute text, when it did not parse as an integer
     aliases: tuple[str, ...] = ()  # names of <Alias> children
+    declared_type: str | None = None
+    unit: str | None = None
+    display_unit: str | None = None
+    alias_display_units: tuple[tuple[str, str], ...] = ()  # (alias name, displayUnit) where given
 
     @property
     def is_float(self) -> bool:
@@ -116,6 +122,7 @@ class ModelDescription:
     has_co_simulation: bool = False
     has_scheduled_execution: bool = False
     default_experiment: DefaultExperiment | None = None
+    definitions: Definitions = NO_DEFINITIONS
     by_vr: Mapping[int, Variable] = field(default_factory=dict, init=False, repr=False,
                                           compare=False, hash=False)
 
@@ -193,10 +200,11 @@ def _variable(el: etree._Element) -> Variable | None:
     variability, initial = _effective(type_, causality, declared_var)
     declared_init = get("initial")
     start = get("start")
-    dims: list[Dimension] = []
-    aliases: list[str] = []
-    if len(el):
-        start = _children_of_variable(el, start, dims, aliases)
+    dims: tuple[Dimension, ...] = ()
+    aliases: tuple[str, ...] = ()
+    alias_units: tuple[tuple[str, str], ...] = ()
+    if len(el):  # most variables have no children: no lists to build for them
+        start, dims, aliases, alias_units = _children_of_variable(el, start)
     raw_vr = get("valueReference")
     vr = parse_vr(raw_vr)
     derivative = get("derivative")
@@ -205,17 +213,22 @@ def _variable(el: etree._Element) -> Variable | None:
         get("name", ""), vr, type_, causality, variability, declared_init or initial,
         declared_var, declared_init, start,
         parse_vr(derivative) if derivative is not None else None,
-        el.sourceline, tuple(dims), get("nominal"), get("min"), get("max"),
+        el.sourceline, dims, get("nominal"), get("min"), get("max"),
         get("description"), get("reinit", "false") in ("true", "1"), get("clocks"),
         parse_vr(previous) if previous is not None else None,
-        raw_vr if vr is None else None, tuple(aliases),
+        raw_vr if vr is None else None, aliases, get("declaredType"), get("unit"),
+        get("displayUnit"), alias_units,
     )
 
 
-def _children_of_variable(el: etree._Element, start: str | None, dims: list[Dimension],
-                          aliases: list[str]) -> str | None:
-    """Read <Start>, <Alias> and <Dimension> children; returns the start value."""
-    starts = []
+def _children_of_variable(el: etree._Element, start: str | None) -> tuple[
+        str | None, tuple[Dimension, ...], tuple[str, ...], tuple[tuple[str, str], ...]]:
+    """Read <Start>, <Alias> and <Dimension> children: the start value, the dimensions, the
+    alias names and the (alias name, displayUnit) pairs."""
+    starts: list[str] = []
+    dims: list[Dimension] = []
+    aliases: list[str] = []
+    alias_units: list[tuple[str, str]] = []
     for child in el:
         if not isinstance(child.tag, str):
             continue
@@ -224,10 +237,16 @@ def _children_of_variable(el: etree._Element, start: str | None, dims: list[Dime
             starts.append(child.get("value", ""))
         elif tag == "Alias":
             aliases.append(child.get("name", ""))
+            if (shown := child.get("displayUnit")) is not None:
+                alias_units.append((aliases[-1], shown))
         elif tag == "Dimension":
-            dims.append(Dimension(child.get("start"), parse_vr(child.get("valueReference")),
-                                  child.sourceline))
-    return start if start is not None or not starts else " ".join(starts)
+            raw = child.get("valueReference")
+            vr = parse_vr(raw)
+            dims.append(Dimension(child.get("start"), vr, child.sourceline,
+                                  raw if vr is None else None))
+    if starts and start is None:
+        start = " ".join(starts)
+    return start, tuple(dims), tuple(aliases), tuple(alias_units)
 
 
 def _children(el: etree._Element | None, name: str) -> list[etree._Element]:
@@ -275,6 +294,7 @@ def read_model_description(tree: etree._ElementTree, *, file: str = MODEL_DESCRI
         line=root.sourceline, has_co_simulation=_first(root, "CoSimulation") is not None,
         has_scheduled_execution=_first(root, "ScheduledExecution") is not None,
         default_experiment=_default_experiment(_first(root, "DefaultExperiment")),
+        definitions=read_definitions(root),
     )
 
 

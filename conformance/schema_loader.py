@@ -4,6 +4,7 @@ Where the schemas come from:
 
 - ``modelDescription.xml``: ``fmi3ModelDescription.xsd`` of the FMI 3.0 core, read at run time
   from the installed fmpy package (``fmpy/schema/fmi3``); never copied, never fetched.
+- ``sources/buildDescription.xml`` (source FMUs): ``fmi3BuildDescription.xsd``, from fmpy too.
 - the manifest: ``schemas/fmi-ls-dae-<draft>.xsd`` (ours, one per draft). They reference the core
   schemas through the virtual location ``fmi-core/<file>.xsd``, which the resolver below maps to
   the same fmpy folder.
@@ -28,6 +29,7 @@ from .paths import schemas_dir
 log = logging.getLogger(__name__)
 
 MODEL_DESCRIPTION_XSD = "fmi3ModelDescription.xsd"
+BUILD_DESCRIPTION_XSD = "fmi3BuildDescription.xsd"
 
 #: Our schema file for each draft id (in the ``schemas/`` folder).
 SCHEMA_FILES: dict[str, str] = {
@@ -115,6 +117,12 @@ def model_description_schema() -> etree.XMLSchema:
 
 
 @functools.lru_cache(maxsize=None)
+def build_description_schema() -> etree.XMLSchema:
+    """``fmi3BuildDescription.xsd`` from fmpy (for ``sources/buildDescription.xml``), loaded once."""
+    return _load_schema(core_schema_dir() / BUILD_DESCRIPTION_XSD)
+
+
+@functools.lru_cache(maxsize=None)
 def manifest_schema(draft: str) -> etree.XMLSchema:
     """Our XSD for a draft id of :mod:`conformance.drafts.detect`, loaded once per process."""
     try:
@@ -127,4 +135,5 @@ def manifest_schema(draft: str) -> etree.XMLSchema:
 def clear_schema_cache() -> None:
     """Forget every loaded schema (tests use this to prove that loading stays offline)."""
     model_description_schema.cache_clear()
+    build_description_schema.cache_clear()
     manifest_schema.cache_clear()

@@ -36,8 +36,10 @@ from .drafts.detect import (
 from .drafts.elements import all_elements, written_name
 from .findings import Location, Violation, evidence
 from .schema_loader import (
+    BUILD_DESCRIPTION_XSD,
     MODEL_DESCRIPTION_XSD,
     SCHEMA_FILES,
+    build_description_schema,
     manifest_schema,
     model_description_schema,
 )
@@ -45,6 +47,8 @@ from .schema_messages import attribute_of, clean_message
 
 RULE = "schema-violation"
 MODEL_DESCRIPTION_FILE = "modelDescription.xml"
+BUILD_DESCRIPTION_RULE = "build-description-invalid"
+BUILD_DESCRIPTION_FILE = "sources/buildDescription.xml"
 
 #: The local name of the root each draft's schema accepts (legacy roots may also be in the ls namespace).
 EXPECTED_ROOTS: dict[str, str] = {
@@ -81,6 +85,28 @@ def validate_model_description(tree: XmlInput, *, file: str = MODEL_DESCRIPTION_
     yield from _run(model_description_schema(), tree, file=file, schema_name=MODEL_DESCRIPTION_XSD)
 
 
+def validate_build_description(tree: XmlInput, *, file: str = BUILD_DESCRIPTION_FILE
+                               ) -> Iterator[Violation]:
+    """Validate a parsed ``sources/buildDescription.xml`` against ``fmi3BuildDescription.xsd``.
+
+    Yields ``build-description-invalid`` violations (the file of a source FMU; fmpy validate
+    rejects an FMU whose build description does not validate).
+    """
+    root = _root_of(tree)
+    if etree.QName(root).text != "fmiBuildDescription":
+        yield Violation(
+            message=f"the root element is <{written_name(root)}>; an FMI 3.0 buildDescription.xml "
+            "has the root <fmiBuildDescription> in no namespace",
+            location=Location(file=file, line=root.sourceline, path="/" + written_name(root)),
+            evidence=evidence(schema=BUILD_DESCRIPTION_XSD),
+            subject="/" + written_name(root),
+            rule=BUILD_DESCRIPTION_RULE,
+        )
+        return
+    yield from _run(build_description_schema(), tree, file=file,
+                    schema_name=BUILD_DESCRIPTION_XSD, rule=BUILD_DESCRIPTION_RULE)
+
+
 def validate_manifest(tree: XmlInput, draft: str, *, file: str) -> Iterator[Violation]:
     """Validate a parsed fmi-ls-dae manifest against our schema for ``draft``.
 
@@ -112,6 +138,7 @@ def _run(
     file: str,
     schema_name: str,
     originals: list[etree._Element] | None = None,
+    rule: str = RULE,
 ) -> Iterator[Violation]:
     with _VALIDATE_LOCK:
         valid = schema.validate(target)
@@ -133,7 +160,7 @@ def _run(
             location=Location(file=file, line=line, column=entry.column or None, path=path),
             evidence=evidence(schema=schema_name, xsd_error=entry.type_name),
             subject=path,
-            rule=RULE,
+            rule=rule,
         )
 
 

@@ -16,14 +16,18 @@ from . import (
     index1,
     manifest_dependencies,
     manifest_lists,
+    model_names,
+    model_references,
     model_structure,
+    model_types,
     model_variables,
     residual,
 )
 
 REGISTRY: dict[str, Check] = {}
 for _module in (header, enable, algebraic, residual, dae_form, manifest_dependencies, manifest_lists,
-                model_variables, model_structure, attribute_values, index1):
+                model_variables, model_structure, attribute_values, index1, model_types,
+                model_names, model_references):
     for _code, _check in _module.CHECKS.items():
         if _code in REGISTRY:  # pragma: no cover - a defect caught by the tests
             raise RuntimeError(f"rule {_code} registered twice")

@@ -11,6 +11,7 @@ from __future__ import annotations
 import weakref
 from typing import Optional
 
+from ..context import CheckContext
 from ..findings import Location
 from ..model import FLOAT_TYPES, ModelDescription, Variable
 from ..unknowns import Unknown
@@ -52,6 +53,18 @@ def allowed_initial(causality: str, variability: str) -> frozenset[str]:
 def var_loc(model: ModelDescription, var: Variable) -> Location:
     """Where a variable is declared in modelDescription.xml."""
     return Location(file=model.file, line=var.line, path=var.path)
+
+
+def enable_vrs(ctx: CheckContext) -> frozenset[int]:
+    """Value references of the manifest's enable parameter(s): the enable rules (DAE2xx)
+    explain their causality, variability, start and use in a <Dimension> better than the
+    generic core rules, which leave them alone."""
+    if ctx.manifest is None or ctx.model is None:
+        return frozenset()
+    names = {v.name: v.vr for v in ctx.model.variables}
+    vrs = {ref.vr if ref.vr is not None else names.get(ref.name or "")
+           for ref in ctx.manifest.enables}
+    return frozenset(vr for vr in vrs if vr is not None)
 
 
 def unknown_loc(u: Unknown) -> Location:

@@ -20,7 +20,14 @@ from ..context import Check, CheckContext
 from ..findings import Location, Violation, evidence
 from ..model import Variable
 from ..unknowns import Unknown
-from .model_analysis import ALLOWED_VARIABILITY, allowed_initial, analyse, unknown_loc, var_loc
+from .model_analysis import (
+    ALLOWED_VARIABILITY,
+    allowed_initial,
+    analyse,
+    enable_vrs,
+    unknown_loc,
+    var_loc,
+)
 
 
 def model_exchange_missing(ctx: CheckContext) -> Iterator[Violation]:
@@ -105,22 +112,11 @@ _VARIABILITY_MESSAGES = {
 }
 
 
-def _enable_vrs(ctx: CheckContext) -> frozenset[int]:
-    """Value references of the manifest's enable parameter(s): the enable rules (DAE2xx)
-    explain their causality, variability and start better than the generic core rules."""
-    if ctx.manifest is None or ctx.model is None:
-        return frozenset()
-    names = {v.name: v.vr for v in ctx.model.variables}
-    vrs = {ref.vr if ref.vr is not None else names.get(ref.name or "")
-           for ref in ctx.manifest.enables}
-    return frozenset(vr for vr in vrs if vr is not None)
-
-
 def causality_variability_invalid(ctx: CheckContext) -> Iterator[Violation]:
     """DAE504 MV-10, MV-11, MV-12: legal causality/variability pairs (defaults applied)."""
     if (model := ctx.model) is None:
         return
-    enable = _enable_vrs(ctx)
+    enable = enable_vrs(ctx)
     for var, (fault, _, _) in analyse(model).verdicts:
         if fault is None or var.vr in enable:
             continue
@@ -154,7 +150,7 @@ def start_missing(ctx: CheckContext) -> Iterator[Violation]:
     """DAE506 MV-21: start is required for exact/approx, parameters, inputs and constants."""
     if (model := ctx.model) is None:
         return
-    enable = _enable_vrs(ctx)
+    enable = enable_vrs(ctx)
     for var, (_, _, problem) in analyse(model).verdicts:
         if problem is not None and problem[0] == "missing" and var.vr not in enable:
             yield Violation(

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from typing import Mapping
 
-from . import (basic, derivatives, dgdw, endurance, event_indicators, handshake,
+from . import (basic, derivatives, dgdw, endurance, evaluation, event_indicators, handshake,
                importer_paths, initial_unknowns, simulation)
 from .api import Probe
 
@@ -24,6 +24,7 @@ def register(family: Mapping[str, Probe]) -> None:
 
 register(handshake.PROBES)
 register(basic.PROBES)
+register(evaluation.PROBES)
 register(derivatives.PROBES)
 register(dgdw.PROBES)
 register(simulation.PROBES)

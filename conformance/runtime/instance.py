@@ -6,83 +6,21 @@ the unknowns asked for, using the :class:`~conformance.runtime.layout.Layout` of
 from __future__ import annotations
 
 import ctypes
-from typing import Any, NamedTuple, Sequence
+from typing import Any, Sequence
 
 import numpy as np
 
 from .errors import FmiError, Unavailable
 from .library import Library
 from .point import Point
+from .records import Dependency, DiscreteStates, KnownNotSet, PointNotSet
+
+__all__ = ["Dependency", "DiscreteStates", "Instance", "KnownNotSet", "PointNotSet",
+           "Unavailable"]
 
 # fmi3DependencyKind in the order of the C enum; fmi3Independent has no XML counterpart (MS-13)
 DEPENDENCY_KINDS = ("independent", "constant", "fixed", "tunable", "discrete", "dependent")
 MAX_DEPENDENCIES = 10_000_000   # a larger count from the FMU is garbage, not an allocation
-
-
-class Dependency(NamedTuple):
-    """One entry of fmi3GetVariableDependencies: the independent's value reference, its
-    dependenciesKind ("dependent", "constant", ..., or "invalid (k)" for a value outside the
-    enum) and the element indices of independent and dependent (0 for scalars)."""
-
-    vr: int
-    kind: str
-    element: int = 0
-    dependent_element: int = 0
-
-
-class KnownNotSet(FmiError):
-    """Setting one kind of known of a point failed (in :meth:`Instance.set_point`).
-
-    ``kind`` is what was being set: "time" (fmi3SetTime), "states" (fmi3SetContinuousStates),
-    "algebraic variables", "inputs", or "algebraic variables and inputs" (one fmi3SetFloat64
-    sets both when a point has both); ``vrs`` the value references, ``names`` their names,
-    ``mode`` the instance's mode ("dae" or "ode", in Continuous-Time Mode). The call, status and
-    log are those of the FmiError of the set.
-    """
-
-    def __init__(self, error: FmiError, kind: str, vrs: Sequence[int], names: Sequence[str],
-                 mode: str):
-        super().__init__(error.call, error.status, error.log)
-        self.after = error.after
-        self.kind, self.vrs, self.names, self.mode = kind, tuple(vrs), tuple(names), mode
-
-    def describe(self) -> str:
-        what = ""
-        if self.vrs:
-            shown = ", ".join(f"{n} (valueReference {vr})"
-                              for n, vr in zip(self.names[:5], self.vrs[:5]))
-            what = f" of the {self.kind} {shown}{', ...' if len(self.vrs) > 5 else ''}"
-        first = f": {self.log[0]}" if self.log else ""
-        return (f"{self.call}{what} returned {self.status} in {self.mode.upper()} mode, "
-                f"Continuous-Time Mode{first}")
-
-
-class PointNotSet(Unavailable):
-    """Setting a point's knowns failed inside evaluate/directional/adjoint.
-
-    An :class:`Unavailable` (a probe's ProbeSkipped), not an :class:`FmiError`: the fault is a
-    rejected set, which ``algebraic-not-settable`` (algebraic variables),
-    ``input-not-settable`` (inputs) and ``evaluation-failed`` (time, states) report; a probe
-    that catches FmiError around an evaluation must not report it again.
-    ``error`` is the :class:`KnownNotSet` of the set (``kind`` says what was being set).
-    """
-
-    def __init__(self, point: Point, error: FmiError):
-        super().__init__(f"cannot set point {point.label}: {error.cause()}")
-        self.point, self.error = point, error
-
-
-class DiscreteStates(NamedTuple):
-    """What fmi3UpdateDiscreteStates returned: discreteStatesNeedUpdate, terminateSimulation,
-    nominalsOfContinuousStatesChanged, valuesOfContinuousStatesChanged, and nextEventTime
-    (None when nextEventTimeDefined is false); ``calls``: how many calls gave it."""
-
-    needs_update: bool
-    terminate: bool
-    nominals_changed: bool
-    values_changed: bool
-    next_time: float | None
-    calls: int = 1
 
 
 def _vrs(values: Sequence[int]) -> Any:

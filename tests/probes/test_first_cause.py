@@ -18,7 +18,7 @@ from lxml import etree
 from conformance.catalogue import default_catalogue
 from conformance.manifest import read_manifest
 from conformance.model import read_model_description
-from conformance.probes import basic
+from conformance.probes import basic, evaluation
 from conformance.probes.api import FmiError, Point, ProbeContext, ProbeSkipped
 from conformance.probes.common import renew_failed
 from conformance.runtime.instance import Instance, KnownNotSet, PointNotSet
@@ -138,7 +138,7 @@ def run_basic(ctx: ProbeContext) -> tuple[dict[str, list], dict[str, str]]:
         renew_failed(ctx)
         violations: list = []
         try:
-            for v in basic.PROBES[code](ctx, **OPTIONS[code]):
+            for v in {**basic.PROBES, **evaluation.PROBES}[code](ctx, **OPTIONS[code]):
                 violations.append(v)
         except ProbeSkipped as exc:
             skipped[code] = str(exc)
@@ -173,7 +173,7 @@ def test_a_refused_input_is_input_not_settable_and_nothing_else():
 def test_an_input_refused_in_ode_mode_names_ode_mode():
     ctx = make_ctx(lambda mode, fname, c, args: mode == "ode" and fname == "fmi3SetFloat64"
                    and U2 in _vrs(args))
-    (v,) = list(basic.input_not_settable(ctx))
+    (v,) = list(evaluation.input_not_settable(ctx))
     assert v.subject == "u2" and dict(v.evidence)["mode"] == "ODE mode"
 
 
@@ -200,7 +200,7 @@ def test_evaluation_failed_never_blames_a_call_on_a_terminated_instance():
         ctx.dae.set_point(ctx.points[0])     # refused: Terminated since
     # handed the terminated instance, the probe takes a fresh one for every point after a
     # failure: the states' refusal at each point, never fmi3SetTime failing in Terminated
-    found = list(basic.evaluation_failed(ctx))
+    found = list(evaluation.evaluation_failed(ctx))
     assert [v.subject for v in found] == ["fmi3SetContinuousStates"] * 4
     assert {dict(v.evidence)["setting"] for v in found} == {"states"}
 

@@ -15,7 +15,8 @@ from typing import Any
 from ..catalogue import Catalogue
 from ..drafts.detect import DRAFT_LABELS
 from ..findings import Finding, FmuReport, Report, RunInfo, Severity
-from .sarif import RULES_DOC_URL, inner_location, is_baselined, rule_url
+from .sarif import inner_location, is_baselined
+from .sarif_rules import RULES_DOC_URL, rule_url
 
 #: Bytes of summary we allow ourselves; GitHub's limit is 1 MiB per step.
 BUDGET = 900_000

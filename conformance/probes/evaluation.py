@@ -1,17 +1,9 @@
 """The evaluation probes: non-finite values (``nan-or-inf``), evaluations that fail
 (``evaluation-failed``) and inputs that cannot be set (``input-not-settable``); setting the
-algebraic variables, the start and repeatability are in basic.py.
-
-Each probe runs in the worker process on a :class:`~conformance.probes.api.ProbeContext` whose
-``facts`` hold the :class:`~conformance.runtime.layout.Layout` (``"layout"``) and the loaded
-:class:`~conformance.runtime.library.Library` (``"library"``), and yields violations. Tolerances
-are catalogue options. One fault, one finding: a probe that cannot set a point or start DAE mode
-raises :class:`ProbeSkipped` (or lets the :class:`FmiError` escape), and the rule that owns the
-fault reports it: ``evaluation-failed`` time and states, ``algebraic-not-settable`` the algebraic
-variables, ``input-not-settable`` the inputs (the :class:`KnownNotSet` of a refused set says
-which). A call that returned fmi3Error puts the instance in Terminated (SM-04): what fails on it
-afterwards is a consequence, reported by nobody, and a probe that goes on takes a fresh
-instance. Non-finite values are left to ``nan-or-inf``.
+algebraic variables, the start and repeatability are in basic.py, whose docstring gives the
+one-fault-one-finding split between them: here ``evaluation-failed`` owns time and states,
+``input-not-settable`` the inputs, and a call on an instance already Terminated (SM-04) is
+nobody's finding.
 """
 from __future__ import annotations
 

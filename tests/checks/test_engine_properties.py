@@ -126,16 +126,24 @@ INTEGERS = ("valueReference", "dependencies", "derivative")  # UInt32: 429496729
 NUMERIC = [*INTEGERS, "version", "start", "nominal", "startTime", "stopTime", "fmiVersion"]
 
 
-@pytest.mark.parametrize("target", [MODEL_DESCRIPTION, MANIFEST])
-@pytest.mark.parametrize("attribute", NUMERIC)
+def _present() -> list[tuple[str, str]]:
+    """(file, attribute) pairs of NUMERIC that SimpleDAE's XML has (the others cannot be set)."""
+    out = []
+    for target in (MODEL_DESCRIPTION, MANIFEST):
+        root = etree.fromstring(scene_xml("SimpleDAE")[target].read_bytes())
+        names = {a for el in root.iter() if isinstance(el.tag, str) for a in el.attrib}
+        out += [(target, attribute) for attribute in NUMERIC if attribute in names]
+    return out
+
+
+@pytest.mark.parametrize("target, attribute", _present())
 @pytest.mark.parametrize("value", [HUGE, f"{HUGE}.0.0", f"1 {HUGE}", "4294967296"])
 def test_a_number_out_of_range_is_a_finding_never_an_internal_error(target, attribute, value):
     """Every numeric attribute of the scene, set to a number of thousands of digits (or just
     past UInt32): the rule that reads it reports it; no check stops with an internal error."""
     root = etree.fromstring((scene_xml("SimpleDAE")[target]).read_bytes())
     hits = [el for el in root.iter() if isinstance(el.tag, str) and attribute in el.attrib]
-    if not hits:
-        pytest.skip(f"no {attribute} in {target}")
+    assert hits
     mutations = [("set-attr-named", k, 0, (attribute, value)) for k in range(len(hits))]
     for el in hits:
         el.set(attribute, value)

@@ -1,0 +1,159 @@
+"""``lsdae fix FMU``: repair what the files alone determine, then re-check.
+
+    lsdae fix MODEL.fmu -o FIXED.fmu | --in-place | --diff  [--select R] [--ignore R]
+
+It runs the same check as ``lsdae check``, applies the safe fixers of :mod:`conformance.fixes`
+(each kept only when the re-check shows it fixed its findings and added none), re-checks the
+result and prints the remaining findings as ``check`` does, then "fixed N findings, M remain".
+``--diff`` prints a unified diff of every changed file and writes nothing. Exit codes: 0 when
+nothing at the ``--fail-on`` level remains, 1 otherwise, 2 on usage errors. It sits above the
+engine, beside ``check_command``.
+"""
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import difflib
+import sys
+import tempfile
+from collections import Counter
+from pathlib import Path
+from typing import Any
+
+from . import __version__
+from .catalogue import default_catalogue
+from .check_command import exit_code
+from .engine import check_fmu
+from .engine_options import EngineOptions, RuleSelection
+from .exit_codes import UsageError
+from .findings import FmuReport, Report
+from .fixes.apply import Outcome, fix, key
+from .fixes.archive import Package
+from .fmu import default_limits
+from .reporters import console
+
+EPILOG = """exit codes:
+  0  nothing at the --fail-on severity (default: error) remains after fixing
+  1  at least one such finding remains
+  2  usage error (no such FMU, no output chosen, -o naming the input without --in-place)
+
+Only safe fixes are applied: those that follow from the files alone (`lsdae rules` marks the
+fixable rules, `lsdae explain RULE` says how). Every other archive member is copied unchanged."""
+
+
+def add_parser(subparsers: Any) -> argparse.ArgumentParser:
+    """Add the ``fix`` subcommand to ``subparsers`` (from ``add_subparsers``)."""
+    p = subparsers.add_parser(
+        "fix", help="repair what can be derived from the files, then re-check",
+        description="Apply the safe fixes to an FMU (.fmu file or unpacked folder) and re-check "
+                    "it.", epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("fmu", metavar="FMU", help="a .fmu file or an unpacked FMU folder")
+    where = p.add_mutually_exclusive_group()
+    where.add_argument("-o", "--output", metavar="FIXED", help="write the fixed FMU here")
+    where.add_argument("--diff", action="store_true",
+                       help="print a unified diff of every changed file; write nothing")
+    p.add_argument("--in-place", action="store_true", help="overwrite the FMU itself")
+    p.add_argument("--select", action="append", metavar="RULES",
+                   help="only these rules: codes, names or code prefixes, comma-separated")
+    p.add_argument("--ignore", action="append", metavar="RULES", help="skip these rules")
+    p.add_argument("--no-probes", action="store_true",
+                   help="do not load the binary for the final check (fixes are static anyway)")
+    p.add_argument("--fail-on", choices=("error", "warning", "info", "never"), default="error",
+                   help="the least severity that makes the exit code 1 (default: error)")
+    p.add_argument("--color", choices=("auto", "always", "never"), default="auto",
+                   help="colour the console output (default: auto, on a terminal)")
+    return p
+
+
+def _split(values: list[str] | None) -> tuple[str, ...]:
+    return tuple(v.strip() for value in values or () for v in value.split(",") if v.strip())
+
+
+def _destination(args: argparse.Namespace, source: Path) -> Path | None:
+    """Where to write (None for --diff); usage errors for every ambiguous choice."""
+    if args.diff:
+        if args.in_place:
+            raise UsageError("--diff writes nothing: it does not go with --in-place")
+        return None
+    if args.output is None:
+        if not args.in_place:
+            raise UsageError("say where the fixed FMU goes: -o FIXED, --in-place or --diff")
+        return source
+    dest = Path(args.output)
+    if dest.exists() and dest.resolve() == source.resolve():
+        if not args.in_place:
+            raise UsageError(f"-o {dest} is the input; add --in-place to overwrite it")
+        return source
+    if dest.is_dir():
+        raise UsageError(f"-o {dest} is an existing folder; name a new path")
+    if not dest.parent.is_dir():
+        raise UsageError(f"-o {dest}: no such folder {dest.parent}")
+    return dest
+
+
+def fix_fmu(source: Path, *, options: EngineOptions = EngineOptions()) -> Outcome:
+    """The fixes for one FMU, proven by static re-checks (nothing written)."""
+    static = dataclasses.replace(options, probes=False, probes_only=False)
+    catalogue = default_catalogue()
+    original = check_fmu(source, options=static, catalogue=catalogue)
+    package = Package(source, default_limits())
+    return fix(source, package, original,
+               lambda p: check_fmu(p, options=static, catalogue=catalogue))
+
+
+def diff_text(outcome: Outcome) -> str:
+    out: list[str] = []
+    for name, before, after in outcome.package.diffable():
+        out.extend(difflib.unified_diff(
+            before.decode("utf-8", "replace").splitlines(keepends=True),
+            after.decode("utf-8", "replace").splitlines(keepends=True),
+            fromfile=f"a/{name}", tofile=f"b/{name}"))
+    for index in sorted(outcome.package.dropped):
+        out.append(f"dropped duplicate entry #{index + 1} "
+                   f"({outcome.package.entries()[index].filename})\n")
+    return "".join(out)
+
+
+def summary(original: FmuReport, final: FmuReport) -> str:
+    gone = Counter(key(f) for f in original.findings) - Counter(key(f) for f in final.findings)
+    n = sum(gone.values())
+    m = len(final.findings)
+    return f"fixed {n} finding{'s' if n != 1 else ''}, {m} remain{'s' if m == 1 else ''}"
+
+
+def run(args: argparse.Namespace) -> int:
+    source = Path(args.fmu)
+    if not source.exists():
+        raise UsageError(f"no such FMU: {source}")
+    dest = _destination(args, source)
+    options = EngineOptions(select=_split(args.select), ignore=_split(args.ignore),
+                            probes=not args.no_probes)
+    catalogue = default_catalogue()
+    try:
+        RuleSelection(catalogue, options)
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+    outcome = fix_fmu(source, options=options)
+    with tempfile.TemporaryDirectory(prefix="lsdae-fix-") as tmp:
+        target = dest
+        if dest is None:
+            target = Path(tmp) / (source.name or "fmu")
+            if outcome.package.modified:
+                outcome.package.write(target)
+            else:
+                target = source
+            sys.stdout.write(diff_text(outcome))
+        elif outcome.package.modified:
+            outcome.package.write(dest)
+        elif dest != source:
+            outcome.package.write(dest)   # an unchanged copy: -o always produces its output
+        final = check_fmu(target, options=options, catalogue=catalogue,
+                          display_path=str(dest or source))
+    color = args.color == "always" or (args.color == "auto" and sys.stdout.isatty())
+    report = Report(tool_version=__version__, fmus=(final,))
+    if final.findings:
+        sys.stdout.write(console.render(report, catalogue, color=color))
+    for fixer, why in outcome.refused:
+        print(f"not fixed ({fixer}): {why}")
+    print(summary(outcome.original, final))
+    return exit_code(report, args.fail_on)

@@ -27,7 +27,7 @@ from .engine import check_fmu
 from .engine_options import EngineOptions, RuleSelection
 from .exit_codes import UsageError
 from .findings import FmuReport, Report
-from .fixes.apply import Outcome, fix, key
+from .fixes.apply import ALL, Outcome, fix, key
 from .fixes.archive import Package
 from .fmu import default_limits
 from .reporters import console
@@ -134,9 +134,12 @@ def run(args: argparse.Namespace) -> int:
     except ValueError as exc:
         raise UsageError(str(exc)) from None
     outcome = fix_fmu(source, options=options)
+    untouchable = any(fixer == ALL for fixer, _ in outcome.refused)
     with tempfile.TemporaryDirectory(prefix="lsdae-fix-") as tmp:
         target = dest
-        if dest is None:
+        if untouchable:
+            target = source  # an unsafe archive is neither copied nor rewritten
+        elif dest is None:
             target = Path(tmp) / (source.name or "fmu")
             if outcome.package.modified:
                 outcome.package.write(target)

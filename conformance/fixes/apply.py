@@ -2,7 +2,9 @@
 
 After each fixer the candidate is written to a private temporary place and re-checked (the
 caller passes ``recheck``: this package sits below the engine). A change is kept when the
-findings it claimed are gone and the re-check has no finding the original did not have;
+findings it claimed are gone, every rule that ran still runs (a finding may not vanish because
+the file it is about can no longer be read), and the re-check has no finding the original did
+not have;
 otherwise it is refused with the reason, and the next fixer starts from the last good state.
 """
 from __future__ import annotations
@@ -21,6 +23,9 @@ from .fixers import FIXERS, Change
 
 #: Archive findings after which nothing is rewritten: the input is not trusted enough to copy.
 UNSAFE = (UNSAFE_PATH, TOO_LARGE, UNREADABLE)
+
+#: The "fixer" named by a refusal that stops every fix.
+ALL = "all"
 
 Key = tuple[str, str | None, str | None]
 
@@ -48,7 +53,7 @@ def fix(path: Path, package: Package, original: FmuReport,
     """Run every fixer on ``package`` whose rules have findings in ``original``."""
     unsafe = [f for f in original.findings if f.name in UNSAFE]
     if unsafe:
-        return Outcome(package, (), (("all", f"{unsafe[0].name}: the archive is not rewritten "
+        return Outcome(package, (), ((ALL, f"{unsafe[0].name}: the archive is not rewritten "
                                               "while check finds it unsafe or unreadable"),),
                        original, original)
     baseline = keys(original.findings)
@@ -71,7 +76,10 @@ def fix(path: Path, package: Package, original: FmuReport,
             report = recheck(out)
         new = keys(report.findings) - baseline
         still = set(keys(change.fixes)) & set(keys(report.findings))
-        if new:
+        stopped = sorted(set(current.rules_run) - set(report.rules_run))
+        if stopped:   # a finding can vanish because its rule no longer runs: not a fix
+            refused.append((name, f"rules would no longer run ({', '.join(stopped[:3])})"))
+        elif new:
             first = next(iter(new))
             refused.append((name, f"it would add a finding ({first[0]} on {first[2] or first[1]})"))
         elif still:

@@ -19,7 +19,8 @@ from ..archive_base import TOO_LARGE, UNREADABLE, UNSAFE_PATH
 from ..findings import Finding, FmuReport
 from .archive import Package, PackageError
 from .edits import EditConflict, apply_edits, by_file
-from .fixers import FIXERS, Change
+from .change import Change, NoFix
+from .fixers import FIXERS
 
 #: Archive findings after which nothing is rewritten: the input is not trusted enough to copy.
 UNSAFE = (UNSAFE_PATH, TOO_LARGE, UNREADABLE)
@@ -67,7 +68,7 @@ def fix(path: Path, package: Package, original: FmuReport,
             if change is None:
                 continue
             candidate = _apply(package, change)
-        except (EditConflict, PackageError, ValueError) as exc:
+        except (NoFix, EditConflict, PackageError, ValueError) as exc:
             refused.append((name, str(exc)))
             continue
         with tempfile.TemporaryDirectory(prefix="lsdae-fix-") as tmp:

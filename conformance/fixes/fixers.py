@@ -6,26 +6,15 @@ when nothing can be derived exactly. Fixers never parse and re-serialise XML.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import Callable, Sequence
 
-from ..drafts.detect import ALPHA1_DESCRIPTION, ALPHA1_NAME, ALPHA1_VERSION, LS_NAMESPACE
 from ..findings import Finding
 from .archive import Package
+from .change import Change
 from .edits import Edit
-from .xmltext import escape, root_start_tag
-
-ALPHA1_ROOT = "fmiDAEManifest"
-HEADER = {"fmi-ls-name": ALPHA1_NAME, "fmi-ls-version": ALPHA1_VERSION,
-          "fmi-ls-description": ALPHA1_DESCRIPTION}
-
-
-@dataclass(frozen=True)
-class Change:
-    fixer: str
-    fixes: tuple[Finding, ...]
-    edits: tuple[Edit, ...] = ()
-    drop: frozenset[int] = frozenset()
+from .header import ALPHA1_ROOT, HEADER, header_edits
+from .migrate import migrate_manifest
+from .xmltext import root_start_tag
 
 
 def declare_prefix(package: Package, findings: Sequence[Finding]) -> Change | None:
@@ -61,33 +50,8 @@ def header_fields(package: Package, findings: Sequence[Finding]) -> Change | Non
         tag = root_start_tag(data) if data is not None else None
         if tag is None or tag.name != ALPHA1_ROOT:
             continue  # a legacy shape: the migration sets the header with everything else
-        prefixes = tag.prefixes_for(LS_NAMESPACE)
-        prefix = prefixes[0] if prefixes else "fmi-ls"
-        insert = b""
-        if not prefixes:
-            if tag.attribute("xmlns:fmi-ls") is not None:
-                continue  # fmi-ls bound to another namespace: not ours to rebind
-            insert += f' xmlns:fmi-ls="{LS_NAMESPACE}"'.encode()
-        for finding in found:
-            attribute = finding.subject or ""
-            wanted = HEADER[attribute]
-            qualified = next((tag.attribute(f"{p}:{attribute}") for p in prefixes
-                              if tag.attribute(f"{p}:{attribute}") is not None), None)
-            bare = tag.attribute(attribute)
-            if qualified is not None:
-                edits.append(Edit(file, qualified.value_start, qualified.value_end,
-                                  escape(wanted, qualified.quote)))
-            elif bare is not None:
-                end = bare.name_start + len(attribute)
-                edits.append(Edit(file, bare.name_start, end, f"{prefix}:{attribute}".encode()))
-                if bare.value != wanted:
-                    edits.append(Edit(file, bare.value_start, bare.value_end,
-                                      escape(wanted, bare.quote)))
-            else:
-                insert += f' {prefix}:{attribute}="'.encode() + escape(wanted) + b'"'
-            fixed.append(finding)
-        if insert:
-            edits.append(Edit(file, tag.close, tag.close, insert))
+        edits += header_edits(file, tag, [f.subject or "" for f in found])
+        fixed += found
     return Change("header-fields", tuple(fixed), tuple(edits)) if fixed else None
 
 
@@ -117,4 +81,5 @@ FIXERS: dict[str, tuple[tuple[str, ...], Fixer]] = {
     "identical-duplicates": (("DAE003",), identical_duplicates),
     "declare-prefix": (("DAE010",), declare_prefix),
     "header-fields": (("DAE102", "DAE103", "DAE104"), header_fields),
+    "migrate-manifest": (("DAE021",), migrate_manifest),
 }

@@ -6,7 +6,7 @@ return None and no text fix is offered. Nothing here re-serialises: callers edit
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 _PROLOG_ITEM = re.compile(rb"\s*(?:<\?.*?\?>|<!--.*?-->|<!DOCTYPE[^>\[]*(?:\[.*?\])?\s*>)", re.S)
 _START = re.compile(rb"<([A-Za-z_][\w.:-]*)")
@@ -58,6 +58,11 @@ def root_start_tag(data: bytes) -> StartTag | None:
         pos = item.end()
     while pos < len(data) and data[pos:pos + 1].isspace():
         pos += 1
+    return start_tag_at(data, pos)
+
+
+def start_tag_at(data: bytes, pos: int) -> StartTag | None:
+    """The start tag beginning at ``data[pos]`` ('<'), or None."""
     start = _START.match(data, pos)
     if start is None:
         return None
@@ -76,6 +81,63 @@ def root_start_tag(data: bytes) -> StartTag | None:
         return None
     return StartTag(start.group(1).decode("ascii", "replace"), start.start(), start.end(),
                     tuple(attributes), end.start(1))
+
+
+@dataclass
+class Element:
+    """An element's byte spans: its start tag, and where it ends (after its end tag)."""
+
+    tag: StartTag
+    end: int = -1
+    end_tag_start: int | None = None      # None for an empty-element tag <x/>
+    children: list[Element] = field(default_factory=list)
+
+    @property
+    def name(self) -> str:
+        return self.tag.name
+
+    def named(self, name: str) -> list[Element]:
+        return [c for c in self.children if c.name == name]
+
+
+_MARKUP = re.compile(rb"<!--.*?-->|<\?.*?\?>|<!\[CDATA\[.*?\]\]>|<!DOCTYPE[^>\[]*(?:\[.*?\])?\s*>|"
+                     rb"</([A-Za-z_][\w.:-]*)\s*>|<", re.S)
+
+
+def element_tree(data: bytes) -> Element | None:
+    """The document's elements with their byte spans, or None when it cannot be read exactly
+    (a wide encoding, a tag it does not understand, mismatched end tags)."""
+    if not ascii_compatible(data):
+        return None
+    stack: list[Element] = []
+    root: Element | None = None
+    pos = 0
+    while (m := _MARKUP.search(data, pos)) is not None:
+        if m.group(0) == b"<":
+            tag = start_tag_at(data, m.start())
+            if tag is None:
+                return None
+            element = Element(tag)
+            if stack:
+                stack[-1].children.append(element)
+            elif root is None:
+                root = element
+            else:
+                return None
+            pos = tag.close + (2 if data[tag.close:tag.close + 2] == b"/>" else 1)
+            if data[tag.close:tag.close + 2] == b"/>":
+                element.end = pos
+            else:
+                stack.append(element)
+        elif m.group(1) is not None:
+            if not stack or stack[-1].name != m.group(1).decode("ascii", "replace"):
+                return None
+            element = stack.pop()
+            element.end_tag_start, element.end = m.start(), m.end()
+            pos = m.end()
+        else:
+            pos = m.end()
+    return root if root is not None and not stack else None
 
 
 def escape(value: str, quote: bytes = b'"') -> bytes:

@@ -57,6 +57,8 @@ def test_a_folder_changes_only_in_the_files_fixed(case, tmp_path):
                and p.read_bytes() != (out / p.relative_to(source)).read_bytes()}
     assert changed == {"extra/org.fmi-standard.fmi-ls-dae/fmi-ls-manifest.xml"}
     name = changed.pop()
+    if case.code == "DAE021":
+        return   # the migration edits many lines; tests/fix/test_migrate.py checks it
     before = (source / name).read_bytes().splitlines()
     after = (out / name).read_bytes().splitlines()
     assert len(before) == len(after)

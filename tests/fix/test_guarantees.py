@@ -9,6 +9,7 @@ import pytest
 from conformance.cli import main
 from conformance.fix_command import fix_fmu
 from conformance.fixes import fixers
+from conformance.fixes.change import Change
 from conformance.fixes.apply import ALL
 from conformance.fixes.edits import Edit
 from tests.fix.conftest import STATIC, codes
@@ -22,12 +23,12 @@ def _case(case_id: str, dest: Path) -> Path:
 def _breaks_the_manifest(package, findings):
     file = findings[0].location.file
     data = package.read(file)
-    return fixers.Change("broken", tuple(findings), (Edit(file, len(data) - 20, len(data), b""),))
+    return Change("broken", tuple(findings), (Edit(file, len(data) - 20, len(data), b""),))
 
 
 def _claims_without_fixing(package, findings):
     file = findings[0].location.file
-    return fixers.Change("idle", tuple(findings), (Edit(file, 0, 0, b""),))
+    return Change("idle", tuple(findings), (Edit(file, 0, 0, b""),))
 
 
 @pytest.mark.parametrize("fixer", [_breaks_the_manifest, _claims_without_fixing])

@@ -12,6 +12,7 @@ from ..findings import Finding
 from .archive import Package
 from .change import Change
 from .edits import Edit
+from .initial_unknowns import add_initial_unknowns
 from .header import ALPHA1_ROOT, HEADER, header_edits
 from .migrate import migrate_manifest
 from .xmltext import root_start_tag
@@ -82,4 +83,5 @@ FIXERS: dict[str, tuple[tuple[str, ...], Fixer]] = {
     "declare-prefix": (("DAE010",), declare_prefix),
     "header-fields": (("DAE102", "DAE103", "DAE104"), header_fields),
     "migrate-manifest": (("DAE021",), migrate_manifest),
+    "add-initial-unknowns": (("DAE513",), add_initial_unknowns),
 }

@@ -91,9 +91,9 @@ def _destination(args: argparse.Namespace, source: Path) -> Path | None:
     return dest
 
 
-def fix_fmu(source: Path, *, options: EngineOptions = EngineOptions()) -> Outcome:
+def fix_fmu(source: Path, *, options: EngineOptions | None = None) -> Outcome:
     """The fixes for one FMU, proven by static re-checks (nothing written)."""
-    static = dataclasses.replace(options, probes=False, probes_only=False)
+    static = dataclasses.replace(options or EngineOptions(), probes=False, probes_only=False)
     catalogue = default_catalogue()
     original = check_fmu(source, options=static, catalogue=catalogue)
     package = Package(source, default_limits())

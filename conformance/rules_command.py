@@ -9,12 +9,11 @@ from .drafts.detect import DRAFT_LABELS
 from .exit_codes import EXIT_OK, UsageError
 from .ruledocs import render_markdown
 
-
 FIX_MARKS = {"safe": "fix", "unsafe": "fix?", None: ""}   # the column of `lsdae rules`
 
 
 def _rule_line(rule: RuleSpec) -> str:
-    return (f"{rule.code}  {rule.name:<40} {str(rule.severity):<8} "
+    return (f"{rule.code}  {rule.name:<40} {rule.severity!s:<8} "
             f"{FIX_MARKS[rule.fix_kind]:<4} {rule.summary}")
 
 

@@ -11,15 +11,15 @@ from __future__ import annotations
 
 import tempfile
 from collections import Counter
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable, Iterable
 
 from ..archive_base import TOO_LARGE, UNREADABLE, UNSAFE_PATH
 from ..findings import Finding, FmuReport
 from .archive import Package, PackageError
-from .edits import EditConflict, apply_edits, by_file
 from .change import Change, NoFix
+from .edits import EditConflict, apply_edits, by_file
 from .fixers import FIXERS
 
 #: Archive findings after which nothing is rewritten: the input is not trusted enough to copy.
@@ -54,8 +54,8 @@ def fix(path: Path, package: Package, original: FmuReport,
     """Run every fixer on ``package`` whose rules have findings in ``original``."""
     unsafe = [f for f in original.findings if f.name in UNSAFE]
     if unsafe:
-        return Outcome(package, (), ((ALL, f"{unsafe[0].name}: the archive is not rewritten "
-                                              "while check finds it unsafe or unreadable"),),
+        why = f"{unsafe[0].name}: the archive is not rewritten while check finds it unsafe"
+        return Outcome(package, (), ((ALL, why),),
                        original, original)
     baseline = keys(original.findings)
     current, applied, refused = original, [], []

@@ -1,8 +1,9 @@
 """Byte-range edits on the original bytes of a file; overlapping edits are refused."""
 from __future__ import annotations
 
+import itertools
+from collections.abc import Iterable
 from dataclasses import dataclass
-from typing import Iterable
 
 
 class EditConflict(ValueError):
@@ -32,7 +33,7 @@ def _overlap(a: Edit, b: Edit) -> bool:
 def apply_edits(data: bytes, edits: Iterable[Edit]) -> bytes:
     """``data`` with every edit applied; raises :class:`EditConflict` if two overlap."""
     ordered = sorted(edits, key=lambda e: (e.start, e.end))
-    for a, b in zip(ordered, ordered[1:]):
+    for a, b in itertools.pairwise(ordered):
         if _overlap(a, b):
             raise EditConflict(f"edits overlap at bytes {b.start}..{b.end} of {b.file}")
     if ordered and ordered[-1].end > len(data):

@@ -6,14 +6,14 @@ when nothing can be derived exactly. Fixers never parse and re-serialise XML.
 """
 from __future__ import annotations
 
-from typing import Callable, Sequence
+from collections.abc import Callable, Sequence
 
 from ..findings import Finding
 from .archive import Package
 from .change import Change
 from .edits import Edit
-from .initial_unknowns import add_initial_unknowns
 from .header import ALPHA1_ROOT, HEADER, header_edits
+from .initial_unknowns import add_initial_unknowns
 from .migrate import migrate_manifest
 from .xmltext import root_start_tag
 

@@ -9,7 +9,7 @@ of its own with the indentation of its neighbour. Extra or duplicate entries are
 """
 from __future__ import annotations
 
-from typing import Sequence
+from collections.abc import Sequence
 
 from ..findings import Finding
 from .archive import Package

@@ -14,7 +14,7 @@ not define once, an
 """
 from __future__ import annotations
 
-from typing import Sequence
+from collections.abc import Sequence
 
 from ..drafts.detect import ATTRIBUTES_ONLY, LEGACY_DRAFTS, LS_NAMESPACE
 from ..drafts.migrate import MODEL_STRUCTURE_ORDER

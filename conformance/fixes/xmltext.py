@@ -8,7 +8,7 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass, field
 
-_PROLOG_ITEM = re.compile(rb"\s*(?:<\?.*?\?>|<!--.*?-->|<!DOCTYPE[^>\[]*(?:\[.*?\])?\s*>)", re.S)
+_PROLOG_ITEM = re.compile(rb"\s*(?:<\?.*?\?>|<!--.*?-->|<!DOCTYPE[^>\[]*(?:\[.*?\])?\s*>)", re.DOTALL)
 _START = re.compile(rb"<([A-Za-z_][\w.:-]*)")
 _ATTRIBUTE = re.compile(rb"(\s+)([A-Za-z_][\w.:-]*)(\s*=\s*)(\"[^\"<]*\"|'[^'<]*')")
 _END = re.compile(rb"\s*(/?>)")
@@ -101,7 +101,7 @@ class Element:
 
 
 _MARKUP = re.compile(rb"<!--.*?-->|<\?.*?\?>|<!\[CDATA\[.*?\]\]>|<!DOCTYPE[^>\[]*(?:\[.*?\])?\s*>|"
-                     rb"</([A-Za-z_][\w.:-]*)\s*>|<", re.S)
+                     rb"</([A-Za-z_][\w.:-]*)\s*>|<", re.DOTALL)
 
 
 def element_tree(data: bytes) -> Element | None:

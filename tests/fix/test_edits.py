@@ -2,7 +2,8 @@
 from __future__ import annotations
 
 import pytest
-from hypothesis import given, strategies as st
+from hypothesis import given
+from hypothesis import strategies as st
 
 from conformance.fixes.edits import Edit, EditConflict, apply_edits
 from conformance.fixes.xmltext import root_start_tag

@@ -8,8 +8,8 @@ import pytest
 
 from conformance.fix_command import fix_fmu
 from conformance.fixes.apply import keys
-from tests.fixturekit import all_cases, materialise
 from tests.fix.conftest import FIXABLE, STATIC, codes
+from tests.fixturekit import all_cases, materialise
 
 # Failing fixtures of fixable rules whose fault has no exact fix (an entry to remove).
 NO_FIX = {"DAE513/fail-2", "DAE513/fail-3"}

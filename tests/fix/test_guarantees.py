@@ -9,8 +9,8 @@ import pytest
 from conformance.cli import main
 from conformance.fix_command import fix_fmu
 from conformance.fixes import fixers
-from conformance.fixes.change import Change
 from conformance.fixes.apply import ALL
+from conformance.fixes.change import Change
 from conformance.fixes.edits import Edit
 from tests.fix.conftest import STATIC, codes
 from tests.fixturekit import all_cases, materialise

@@ -4,7 +4,8 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-from hypothesis import HealthCheck, given, settings, strategies as st
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from conformance.drafts.detect import ALPHA1, LEGACY_DRAFTS, LS_NAMESPACE, detect_draft
 from conformance.fixes.change import NoFix

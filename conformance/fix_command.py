@@ -29,6 +29,7 @@ from .exit_codes import UsageError
 from .findings import FmuReport, Report
 from .fixes.apply import ALL, Outcome, fix, key
 from .fixes.archive import Package
+from .fixes.fixers import UNSAFE_FIXERS
 from .fmu import default_limits
 from .reporters import console
 
@@ -56,6 +57,10 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     p.add_argument("--select", action="append", metavar="RULES",
                    help="only these rules: codes, names or code prefixes, comma-separated")
     p.add_argument("--ignore", action="append", metavar="RULES", help="skip these rules")
+    p.add_argument("--unsafe-fixes", action="store_true",
+                   help="also apply the fixes from what the probes observed the binary do "
+                        "(add an observed dependency, make an observed kind dependent); they "
+                        "only widen what the manifest claims, each re-checked with the probes")
     p.add_argument("--no-probes", action="store_true",
                    help="do not load the binary for the final check (fixes are static anyway)")
     p.add_argument("--fail-on", choices=("error", "warning", "info", "never"), default="error",
@@ -91,14 +96,31 @@ def _destination(args: argparse.Namespace, source: Path) -> Path | None:
     return dest
 
 
-def fix_fmu(source: Path, *, options: EngineOptions | None = None) -> Outcome:
-    """The fixes for one FMU, proven by static re-checks (nothing written)."""
-    static = dataclasses.replace(options or EngineOptions(), probes=False, probes_only=False)
+def fix_fmu(source: Path, *, options: EngineOptions | None = None,
+            unsafe: bool = False) -> Outcome:
+    """The fixes for one FMU (nothing written): the safe ones proven by static re-checks; with
+    ``unsafe``, then the fixes from the probes' observations, proven by re-checks with them."""
+    options = options or EngineOptions()
+    static = dataclasses.replace(options, probes=False, probes_only=False)
     catalogue = default_catalogue()
     original = check_fmu(source, options=static, catalogue=catalogue)
     package = Package(source, default_limits())
-    return fix(source, package, original,
+    safe = fix(source, package, original,
                lambda p: check_fmu(p, options=static, catalogue=catalogue))
+    if not unsafe or any(name == ALL for name, _ in safe.refused):
+        return safe
+    dynamic = dataclasses.replace(options, probes=True, probes_only=False)
+    with tempfile.TemporaryDirectory(prefix="lsdae-fix-") as tmp:
+        current = Path(tmp) / (source.name or "fmu")
+        safe.package.write(current)
+        observed = check_fmu(current, options=dynamic, catalogue=catalogue)
+    more = fix(source, safe.package, observed,
+               lambda p: check_fmu(p, options=dynamic, catalogue=catalogue), UNSAFE_FIXERS)
+    seen = Counter(key(f) for f in original.findings)
+    probed = tuple(f for f in observed.findings if key(f) not in seen)   # what the probes saw
+    return Outcome(more.package, safe.applied + more.applied, safe.refused + more.refused,
+                   more.report, dataclasses.replace(original,
+                                                    findings=original.findings + probed))
 
 
 def diff_text(outcome: Outcome) -> str:
@@ -133,7 +155,9 @@ def run(args: argparse.Namespace) -> int:
         RuleSelection(catalogue, options)
     except ValueError as exc:
         raise UsageError(str(exc)) from None
-    outcome = fix_fmu(source, options=options)
+    if args.unsafe_fixes and args.no_probes:
+        raise UsageError("--unsafe-fixes needs the probes: it does not go with --no-probes")
+    outcome = fix_fmu(source, options=options, unsafe=args.unsafe_fixes)
     untouchable = any(fixer == ALL for fixer, _ in outcome.refused)
     with tempfile.TemporaryDirectory(prefix="lsdae-fix-") as tmp:
         target = dest

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import tempfile
 from collections import Counter
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -50,7 +50,7 @@ class Outcome:
 
 
 def fix(path: Path, package: Package, original: FmuReport,
-        recheck: Callable[[Path], FmuReport]) -> Outcome:
+        recheck: Callable[[Path], FmuReport], fixers: Mapping[str, tuple] = FIXERS) -> Outcome:
     """Run every fixer on ``package`` whose rules have findings in ``original``."""
     unsafe = [f for f in original.findings if f.name in UNSAFE]
     if unsafe:
@@ -59,7 +59,7 @@ def fix(path: Path, package: Package, original: FmuReport,
                        original, original)
     baseline = keys(original.findings)
     current, applied, refused = original, [], []
-    for name, (codes, fixer) in FIXERS.items():
+    for name, (codes, fixer) in fixers.items():
         findings = [f for f in current.findings if f.code in codes]
         if not findings:
             continue

@@ -15,6 +15,7 @@ from .edits import Edit
 from .header import ALPHA1_ROOT, HEADER, header_edits
 from .initial_unknowns import add_initial_unknowns
 from .migrate import migrate_manifest
+from .observed import add_observed_dependencies, observed_kinds
 from .xmltext import root_start_tag
 
 
@@ -84,4 +85,10 @@ FIXERS: dict[str, tuple[tuple[str, ...], Fixer]] = {
     "header-fields": (("DAE102", "DAE103", "DAE104"), header_fields),
     "migrate-manifest": (("DAE021",), migrate_manifest),
     "add-initial-unknowns": (("DAE513",), add_initial_unknowns),
+}
+
+#: The unsafe fixers (``--unsafe-fixes``): from the probes' observations, re-checked with them.
+UNSAFE_FIXERS: dict[str, tuple[tuple[str, ...], Fixer]] = {
+    "add-observed-dependencies": (("DAE742", "DAE750"), add_observed_dependencies),
+    "observed-kinds": (("DAE744", "DAE751"), observed_kinds),
 }

@@ -9,14 +9,17 @@ from conformance.catalogue import CatalogueError, _rule, default_catalogue
 from conformance.cli import main
 from conformance.engine import check_fmu
 from conformance.findings import Report
+from conformance.fixes.fixers import UNSAFE_FIXERS
 from conformance.reporters import json_report
 from tests.fix.conftest import FIXABLE, STATIC
 from tests.fixturekit import all_cases, materialise
 
 
-def test_the_safe_fixes_in_the_catalogue_are_the_fixers():
+def test_the_fixes_in_the_catalogue_are_the_fixers():
     safe = sorted(r.code for r in default_catalogue() if r.fix_kind == "safe")
+    unsafe = sorted(r.code for r in default_catalogue() if r.fix_kind == "unsafe")
     assert safe == FIXABLE
+    assert unsafe == sorted({c for codes, _ in UNSAFE_FIXERS.values() for c in codes})
 
 
 def test_a_fix_entry_names_its_kind():

@@ -25,12 +25,13 @@ from .catalogue import default_catalogue
 from .check_command import exit_code
 from .engine import check_fmu
 from .engine_options import EngineOptions, RuleSelection
-from .exit_codes import UsageError
+from .exit_codes import EXIT_FINDINGS, EXIT_OK, UsageError
 from .findings import FmuReport, Report
 from .fixes.apply import ALL, Outcome, fix, key
 from .fixes.archive import Package
 from .fixes.fixers import UNSAFE_FIXERS
 from .fmu import default_limits
+from .precommit import fmu_roots
 from .reporters import console
 
 EPILOG = """exit codes:
@@ -48,12 +49,18 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "fix", help="repair what can be derived from the files, then re-check",
         description="Apply the safe fixes to an FMU (.fmu file or unpacked folder) and re-check "
                     "it.", epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("fmu", metavar="FMU", help="a .fmu file or an unpacked FMU folder")
+    p.add_argument("fmu", metavar="FMU", nargs="+",
+                   help="a .fmu file or an unpacked FMU folder (several with --in-place or "
+                        "--diff)")
     where = p.add_mutually_exclusive_group()
     where.add_argument("-o", "--output", metavar="FIXED", help="write the fixed FMU here")
     where.add_argument("--diff", action="store_true",
                        help="print a unified diff of every changed file; write nothing")
     p.add_argument("--in-place", action="store_true", help="overwrite the FMU itself")
+    p.add_argument("--pre-commit", action="store_true",
+                   help="the arguments are changed files (modelDescription.xml, manifests, "
+                        ".fmu): fix the FMUs they belong to in place, and exit 1 when a file "
+                        "changed (the lsdae-fix pre-commit hook)")
     p.add_argument("--select", action="append", metavar="RULES",
                    help="only these rules: codes, names or code prefixes, comma-separated")
     p.add_argument("--ignore", action="append", metavar="RULES", help="skip these rules")
@@ -143,11 +150,46 @@ def summary(original: FmuReport, final: FmuReport) -> str:
     return f"fixed {n} finding{'s' if n != 1 else ''}, {m} remain{'s' if m == 1 else ''}"
 
 
+def _fix_one(source: Path, dest: Path | None, args: argparse.Namespace, options: EngineOptions,
+             catalogue: Any) -> tuple[FmuReport, Outcome, bool]:
+    """Fix one FMU, write it (or print its diff), and check what was written; also whether it
+    changed (known before writing: in place, the package reads its originals from ``source``)."""
+    outcome = fix_fmu(source, options=options, unsafe=args.unsafe_fixes)
+    modified = outcome.package.modified
+    untouchable = any(fixer == ALL for fixer, _ in outcome.refused)
+    with tempfile.TemporaryDirectory(prefix="lsdae-fix-") as tmp:
+        target = dest
+        if untouchable:
+            target = source  # an unsafe archive is neither copied nor rewritten
+        elif dest is None:
+            target = Path(tmp) / (source.name or "fmu")
+            if modified:
+                outcome.package.write(target)
+            else:
+                target = source
+            sys.stdout.write(diff_text(outcome))
+        elif modified:
+            outcome.package.write(dest)
+        elif dest != source:
+            outcome.package.write(dest)   # an unchanged copy: -o always produces its output
+        final = check_fmu(target, options=options, catalogue=catalogue,
+                          display_path=str(dest or source))
+    return final, outcome, modified
+
+
 def run(args: argparse.Namespace) -> int:
-    source = Path(args.fmu)
-    if not source.exists():
-        raise UsageError(f"no such FMU: {source}")
-    dest = _destination(args, source)
+    if args.pre_commit:
+        args.in_place = True
+        args.fmu = fmu_roots(args.fmu)   # the FMUs the changed files belong to
+        if not args.fmu:
+            return EXIT_OK
+    sources = [Path(p) for p in args.fmu]
+    for source in sources:
+        if not source.exists():
+            raise UsageError(f"no such FMU: {source}")
+    if len(sources) > 1 and args.output:
+        raise UsageError("-o takes one FMU; fix several with --in-place or --diff")
+    dests = [_destination(args, source) for source in sources]
     options = EngineOptions(select=_split(args.select), ignore=_split(args.ignore),
                             probes=not args.no_probes)
     catalogue = default_catalogue()
@@ -157,30 +199,20 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError(str(exc)) from None
     if args.unsafe_fixes and args.no_probes:
         raise UsageError("--unsafe-fixes needs the probes: it does not go with --no-probes")
-    outcome = fix_fmu(source, options=options, unsafe=args.unsafe_fixes)
-    untouchable = any(fixer == ALL for fixer, _ in outcome.refused)
-    with tempfile.TemporaryDirectory(prefix="lsdae-fix-") as tmp:
-        target = dest
-        if untouchable:
-            target = source  # an unsafe archive is neither copied nor rewritten
-        elif dest is None:
-            target = Path(tmp) / (source.name or "fmu")
-            if outcome.package.modified:
-                outcome.package.write(target)
-            else:
-                target = source
-            sys.stdout.write(diff_text(outcome))
-        elif outcome.package.modified:
-            outcome.package.write(dest)
-        elif dest != source:
-            outcome.package.write(dest)   # an unchanged copy: -o always produces its output
-        final = check_fmu(target, options=options, catalogue=catalogue,
-                          display_path=str(dest or source))
     color = args.color == "always" or (args.color == "auto" and sys.stdout.isatty())
-    report = Report(tool_version=__version__, fmus=(final,))
-    if final.findings:
-        sys.stdout.write(console.render(report, catalogue, color=color))
-    for fixer, why in outcome.refused:
-        print(f"not fixed ({fixer}): {why}")
-    print(summary(outcome.original, final))
-    return exit_code(report, args.fail_on)
+    finals: list[FmuReport] = []
+    changed = False
+    for source, dest in zip(sources, dests):
+        final, outcome, modified = _fix_one(source, dest, args, options, catalogue)
+        finals.append(final)
+        changed = changed or (dest is not None and modified)
+        if final.findings:
+            one = Report(tool_version=__version__, fmus=(final,))
+            sys.stdout.write(console.render(one, catalogue, color=color))
+        for fixer, why in outcome.refused:
+            print(f"not fixed ({fixer}): {why}")
+        print(summary(outcome.original, final) + (f" ({source})" if len(sources) > 1 else ""))
+    code = exit_code(Report(tool_version=__version__, fmus=tuple(finals)), args.fail_on)
+    if args.pre_commit and changed:
+        return EXIT_FINDINGS   # pre-commit's convention: a hook that changed files fails
+    return code

@@ -113,3 +113,25 @@ def test_select_limits_the_fixes(tmp_path):
     assert main(["fix", str(source), "-o", str(out), "--no-probes", "--select", "DAE103"]) == 0
     assert "DAE104" in codes(out)
     assert os.path.isdir(out)
+
+
+def test_pre_commit_fixes_the_fmus_of_the_changed_files_and_fails_when_it_changed_one(
+        tmp_path, monkeypatch):
+    source = _case("DAE104/fail-1", tmp_path)
+    monkeypatch.chdir(tmp_path)
+    changed = ["fmu/extra/org.fmi-standard.fmi-ls-dae/fmi-ls-manifest.xml",
+               "fmu/modelDescription.xml", "notes.txt"]
+    assert main(["fix", "--pre-commit", "--no-probes", *changed]) == 1
+    assert "DAE104" not in codes(source)
+    snapshot = {p: p.read_bytes() for p in source.rglob("*") if p.is_file()}
+    assert main(["fix", "--pre-commit", "--no-probes", *changed]) == 0
+    assert {p: p.read_bytes() for p in source.rglob("*") if p.is_file()} == snapshot
+    assert main(["fix", "--pre-commit", "--no-probes", "notes.txt"]) == 0
+
+
+def test_several_fmus_take_in_place_or_diff(tmp_path):
+    one = _case("DAE104/fail-1", tmp_path / "a")
+    two = _case("DAE102/fail-1", tmp_path / "b")
+    assert main(["fix", str(one), str(two), "-o", str(tmp_path / "x"), "--no-probes"]) == 2
+    assert main(["fix", str(one), str(two), "--in-place", "--no-probes"]) == 0
+    assert "DAE104" not in codes(one) and "DAE102" not in codes(two)

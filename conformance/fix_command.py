@@ -5,7 +5,8 @@
 It runs the same check as ``lsdae check``, applies the safe fixers of :mod:`conformance.fixes`
 (each kept only when the re-check shows it fixed its findings and added none), re-checks the
 result and prints the remaining findings as ``check`` does, then "fixed N findings, M remain".
-``--diff`` prints a unified diff of every changed file and writes nothing. Exit codes: 0 when
+``--diff`` prints a unified diff of every changed file on stdout (the findings and the summary
+go to stderr) and writes nothing. Exit codes: 0 when
 nothing at the ``--fail-on`` level remains, 1 otherwise, 2 on usage errors. It sits above the
 engine, beside ``check_command``.
 """
@@ -206,12 +207,14 @@ def run(args: argparse.Namespace) -> int:
         final, outcome, modified = _fix_one(source, dest, args, options, catalogue)
         finals.append(final)
         changed = changed or (dest is not None and modified)
+        out = sys.stderr if dest is None else sys.stdout   # --diff: stdout is the diff alone
         if final.findings:
             one = Report(tool_version=__version__, fmus=(final,))
-            sys.stdout.write(console.render(one, catalogue, color=color))
+            out.write(console.render(one, catalogue, color=color))
         for fixer, why in outcome.refused:
-            print(f"not fixed ({fixer}): {why}")
-        print(summary(outcome.original, final) + (f" ({source})" if len(sources) > 1 else ""))
+            print(f"not fixed ({fixer}): {why}", file=out)
+        print(summary(outcome.original, final) + (f" ({source})" if len(sources) > 1 else ""),
+              file=out)
     code = exit_code(Report(tool_version=__version__, fmus=tuple(finals)), args.fail_on)
     if args.pre_commit and changed:
         return EXIT_FINDINGS   # pre-commit's convention: a hook that changed files fails

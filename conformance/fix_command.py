@@ -213,6 +213,10 @@ def run(args: argparse.Namespace) -> int:
             out.write(console.render(one, catalogue, color=color))
         for fixer, why in outcome.refused:
             print(f"not fixed ({fixer}): {why}", file=out)
+        for code in sorted({f.code for f in final.findings}):
+            rule = catalogue.get(code)
+            if rule is not None and rule.fix and rule.fix.startswith("none:"):
+                print(f"no fix for {code} {rule.name}: {rule.fix[5:].strip()}", file=out)
         print(summary(outcome.original, final) + (f" ({source})" if len(sources) > 1 else ""),
               file=out)
     code = exit_code(Report(tool_version=__version__, fmus=tuple(finals)), args.fail_on)

@@ -39,7 +39,8 @@ def _section(rule: RuleSpec) -> str:
         _fence(rule.good),
     ]
     if rule.fix:
-        lines += ["", f"Fix ({rule.fix_kind}, `lsdae fix`): {rule.fix.split(':', 1)[1].strip()}"]
+        kind, _, how = rule.fix.partition(":")
+        lines += ["", f"Fix ({kind}, `lsdae fix`): {how.strip()}"]
     if rule.aliases:
         lines += ["", f"Aliases: {', '.join(f'`{a}`' for a in rule.aliases)}"]
     if rule.options:

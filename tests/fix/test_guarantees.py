@@ -135,3 +135,10 @@ def test_several_fmus_take_in_place_or_diff(tmp_path):
     assert main(["fix", str(one), str(two), "-o", str(tmp_path / "x"), "--no-probes"]) == 2
     assert main(["fix", str(one), str(two), "--in-place", "--no-probes"]) == 0
     assert "DAE104" not in codes(one) and "DAE102" not in codes(two)
+
+
+def test_a_finding_without_a_fix_says_why(tmp_path, capsys):
+    remains = _case("DAE010/fail-2", tmp_path)           # DAE401: a residual vr to guess
+    assert main(["fix", str(remains), "-o", str(tmp_path / "out"), "--no-probes"]) == 1
+    lines = capsys.readouterr().out.splitlines()
+    assert any(line.startswith("no fix for DAE401 ") for line in lines)

@@ -2,7 +2,9 @@
 from __future__ import annotations
 
 import os
+import shutil
 import struct
+import subprocess
 import warnings
 import zipfile
 from pathlib import Path
@@ -65,6 +67,9 @@ def test_untouched_entries_are_copied_raw_in_order(tmp_path):
                 (old.CRC, old.compress_size, old.file_size)
             assert _raw(out, new) == _raw(source, old)
     assert zipfile.ZipFile(out).read(MANIFEST) != zipfile.ZipFile(source).read(MANIFEST)
+    if shutil.which("unzip"):   # another reader than Python's accepts the rewritten archive
+        done = subprocess.run(["unzip", "-tq", str(out)], capture_output=True, check=False)
+        assert done.returncode == 0, done.stdout + done.stderr
 
 
 def test_duplicates_that_differ_are_kept(tmp_path):
@@ -80,3 +85,44 @@ def test_duplicates_that_differ_are_kept(tmp_path):
     outcome = fix_fmu(path, options=STATIC)
     assert not outcome.applied and not outcome.package.modified
     assert "DAE003" in codes(path)
+
+
+class _Stream:
+    """A write-only stream without seek: zipfile then writes data descriptors (flag bit 3)."""
+
+    def __init__(self):
+        self.data = bytearray()
+
+    def write(self, b):
+        self.data += b
+        return len(b)
+
+    def tell(self):
+        return len(self.data)
+
+    def flush(self):
+        pass
+
+
+def test_entries_written_with_data_descriptors_are_copied_and_readable(tmp_path):
+    xml = scene_xml("HelloWorldDAE")
+    manifest = xml[MANIFEST].read_bytes().replace(b'support in FMI."', b'support in FMI"')
+    stream = _Stream()
+    with zipfile.ZipFile(stream, "w", zipfile.ZIP_DEFLATED) as zf:
+        zf.writestr(MODEL_DESCRIPTION, xml[MODEL_DESCRIPTION].read_bytes())
+        zf.writestr(BINARY, os.urandom(5000))
+        zf.writestr(MANIFEST, manifest)
+    source = tmp_path / "S.fmu"
+    source.write_bytes(bytes(stream.data))
+    assert all(i.flag_bits & 0x08 for i in zipfile.ZipFile(source).infolist())
+    outcome = fix_fmu(source, options=STATIC)
+    out = tmp_path / "F.fmu"
+    outcome.package.write(out)
+    fixed = zipfile.ZipFile(out)
+    assert fixed.testzip() is None
+    assert "DAE104" in codes(source) and "DAE104" not in codes(out)
+    for old, new in zip(zipfile.ZipFile(source).infolist(), fixed.infolist()):
+        assert new.filename == old.filename
+        if old.filename != MANIFEST:
+            assert _raw(out, new) == _raw(source, old)
+            assert fixed.read(new) == zipfile.ZipFile(source).read(old)

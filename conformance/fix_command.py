@@ -70,7 +70,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
                         "(add an observed dependency, make an observed kind dependent); they "
                         "only widen what the manifest claims, each re-checked with the probes")
     p.add_argument("--no-probes", action="store_true",
-                   help="do not load the binary for the final check (fixes are static anyway)")
+                   help="do not load the binary for the final check (the safe fixes need none)")
     p.add_argument("--fail-on", choices=("error", "warning", "info", "never"), default="error",
                    help="the least severity that makes the exit code 1 (default: error)")
     p.add_argument("--color", choices=("auto", "always", "never"), default="auto",

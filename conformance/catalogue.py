@@ -21,6 +21,7 @@ else:  # pragma: no cover - exercised on 3.10 only
 
 STAGES = ("archive", "xml", "schema", "static", "probe", "simulation")
 NEEDS = ("model-description", "manifest", "dae-layer", "binary")
+FIX_KINDS = ("safe:", "unsafe:", "none:")
 REQUIRED = ("code", "name", "severity", "stage", "drafts", "spec", "summary", "rationale",
             "bad", "good")
 
@@ -45,6 +46,13 @@ class RuleSpec:
     aliases: tuple[str, ...] = ()
     options: tuple[tuple[str, Any], ...] = ()
     source: str = ""
+    fix: str | None = None      # "safe: how", "unsafe: how" or "none: why no fix can exist"
+
+    @property
+    def fix_kind(self) -> str | None:
+        """``"safe"``, ``"unsafe"`` or None (no fix): what ``lsdae fix`` can do for this rule."""
+        kind = self.fix.split(":", 1)[0] if self.fix else None
+        return kind if kind in ("safe", "unsafe") else None
 
     def applies_to(self, draft: str | None) -> bool:
         return "*" in self.drafts or (draft is not None and draft in self.drafts)
@@ -105,6 +113,11 @@ def _rule(table: Mapping[str, Any], source: str) -> RuleSpec:
     for need in needs:
         if need not in NEEDS:
             raise CatalogueError(f"{source}: rule {table['code']} has unknown need {need!r}")
+    fix = table.get("fix")
+    if fix is not None and (not isinstance(fix, str)
+                            or not fix.startswith(FIX_KINDS) or not fix.split(":", 1)[1].strip()):
+        raise CatalogueError(f"{source}: rule {table['code']} has fix {fix!r}; write "
+                             '"safe: how", "unsafe: how" or "none: why"')
     return RuleSpec(
         code=table["code"], name=table["name"], severity=Severity.parse(table["severity"]),
         stage=stage, drafts=tuple(table["drafts"]), needs=needs, spec=table["spec"],
@@ -112,6 +125,7 @@ def _rule(table: Mapping[str, Any], source: str) -> RuleSpec:
         bad=table["bad"].strip("\n"), good=table["good"].strip("\n"),
         aliases=tuple(table.get("aliases", ())),
         options=tuple(sorted(table.get("options", {}).items())), source=source,
+        fix=" ".join(fix.split()) if fix else None,
     )
 
 

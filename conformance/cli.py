@@ -21,6 +21,7 @@ from .exit_codes import EXIT_INTERRUPTED, EXIT_USAGE, UsageError
 from .reporters import REPORTER_BY_NAME
 from .rules_command import cmd_explain, cmd_rules
 from . import simulate_command
+from . import fix_command
 
 
 EXIT_CODES = """exit codes:
@@ -64,6 +65,7 @@ def _parser() -> argparse.ArgumentParser:
     explain.add_argument("rule", metavar="CODE-or-name",
                          help="a rule code (DAE601) or name (algebraic-jacobian-singular)")
     simulate_command.add_parser(sub)
+    fix_command.add_parser(sub)
     return parser
 
 
@@ -132,7 +134,8 @@ def _check_arguments(check: argparse.ArgumentParser) -> None:
 
 
 COMMANDS = {"check": cmd_check, "pre-commit": cmd_precommit, "rules": cmd_rules,
-            "explain": cmd_explain, "simulate": simulate_command.run}
+            "explain": cmd_explain, "simulate": simulate_command.run,
+            "fix": fix_command.run}
 
 
 def main(argv: Sequence[str] | None = None) -> int:

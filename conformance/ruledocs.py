@@ -38,6 +38,9 @@ def _section(rule: RuleSpec) -> str:
         "",
         _fence(rule.good),
     ]
+    if rule.fix:
+        kind, _, how = rule.fix.partition(":")
+        lines += ["", f"Fix ({kind}, `lsdae fix`): {how.strip()}"]
     if rule.aliases:
         lines += ["", f"Aliases: {', '.join(f'`{a}`' for a in rule.aliases)}"]
     if rule.options:

@@ -9,9 +9,12 @@ from .drafts.detect import DRAFT_LABELS
 from .exit_codes import EXIT_OK, UsageError
 from .ruledocs import render_markdown
 
+FIX_MARKS = {"safe": "fix", "unsafe": "fix?", None: ""}   # the column of `lsdae rules`
+
 
 def _rule_line(rule: RuleSpec) -> str:
-    return f"{rule.code}  {rule.name:<40} {str(rule.severity):<8} {rule.summary}"
+    return (f"{rule.code}  {rule.name:<40} {rule.severity!s:<8} "
+            f"{FIX_MARKS[rule.fix_kind]:<4} {rule.summary}")
 
 
 def cmd_rules(args: argparse.Namespace) -> int:
@@ -32,6 +35,7 @@ def explain_text(rule: RuleSpec) -> str:
         f"Applies to: {drafts}",
         f"Spec:       {rule.spec}",
     ]
+    parts.append(f"Fix:        {rule.fix or 'none: `lsdae fix` leaves this finding'}")
     if rule.aliases:
         parts.append(f"Aliases:    {', '.join(rule.aliases)}")
     parts += ["", "Why it matters:", _indent(rule.rationale), "", "Fails:", _indent(rule.bad),

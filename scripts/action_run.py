@@ -11,6 +11,8 @@ Inputs come from environment variables that action.yml sets from the action's in
     LSDAE_SARIF        path of a SARIF report to write, optional
     LSDAE_BASELINE     a baseline file (lsdae check --baseline), optional
     LSDAE_REPORT_DIR   where lsdae.json, lsdae.md and lsdae.html go (default lsdae-report)
+    LSDAE_FIX          true | false: also run ``lsdae fix`` (safe fixes) on every FMU; the fixed
+                       FMUs and lsdae-fix.diff go to <report-dir>/fixed (action.yml uploads it)
     LSDAE_ACTION_PATH  the action's checkout, installed with pip
     LSDAE_ACTION_SKIP_INSTALL=1   use the lsdae importable by this Python instead (tests)
 
@@ -84,6 +86,28 @@ def _arguments(fmus: list[str], report_dir: Path, fail_on: str) -> list[str]:
     return args
 
 
+def fix_all(lsdae: list[str], fmus: list[str], report_dir: Path) -> Path:
+    """``lsdae fix`` on every FMU: the fixed copies (only those that changed) and one diff."""
+    fixed = report_dir / "fixed"
+    fixed.mkdir(parents=True, exist_ok=True)
+    diffs: list[str] = []
+    print("::group::lsdae fix", flush=True)
+    for fmu in fmus:
+        done = subprocess.run([*lsdae, "fix", fmu, "--diff", "--no-probes", "--color", "never"],
+                              capture_output=True, text=True, check=False)
+        sys.stdout.write(done.stderr)
+        if done.returncode == EXIT_USAGE or not done.stdout:
+            continue
+        diffs.append(done.stdout)
+        name = fmu.strip("/").replace("/", "__") or "fmu"
+        subprocess.run([*lsdae, "fix", fmu, "-o", str(fixed / name), "--no-probes",
+                        "--color", "never", "--fail-on", "never"], capture_output=True,
+                       check=False)
+    print("::endgroup::", flush=True)
+    (fixed / "lsdae-fix.diff").write_text("".join(diffs), encoding="utf-8")
+    return fixed
+
+
 def counts(report: dict) -> dict[str, int]:
     """Findings by severity, leaving out those a baseline accepted."""
     out = {"errors": 0, "warnings": 0, "infos": 0, "baselined": 0,
@@ -128,7 +152,8 @@ def main() -> int:
                   "report-dir": report_dir})
         _append("GITHUB_STEP_SUMMARY", "**lsdae**: no FMU matched the `fmus` pattern.\n")
         return EXIT_USAGE
-    command = _lsdae_command() + _arguments(fmus, report_dir, fail_on)
+    lsdae = _lsdae_command()
+    command = lsdae + _arguments(fmus, report_dir, fail_on)
     print(f"lsdae: checking {len(fmus)} FMU{'s' if len(fmus) != 1 else ''}", flush=True)
     code = subprocess.run(command).returncode
     json_path, md_path = report_dir / "lsdae.json", report_dir / "lsdae.md"
@@ -143,6 +168,8 @@ def main() -> int:
     _outputs(values)
     if md_path.is_file():
         _append("GITHUB_STEP_SUMMARY", md_path.read_text(encoding="utf-8") + "\n")
+    if _env("LSDAE_FIX").lower() == "true":
+        fix_all(lsdae, fmus, report_dir)
     return code
 
 

@@ -219,7 +219,8 @@ def dependencies_kind_violated(ctx: ProbeContext, *, rtol: float, margin: float,
         yield Violation(
             f"{{subject}}: declared '{c.kind}', but the partial derivative changes between "
             "sampling points (the unknown is not affine in the known)", layout.rows[i].location,
-            evidence(entry=layout.entry(i, j), kind=c.kind, smallest=c.lo[0],
+            evidence(entry=layout.entry(i, j), kind=c.kind, known_value_reference=layout.cols[j].vr,
+                     smallest=c.lo[0],
                      largest=c.hi[0], tolerance=c.tolerance,
                      points=[point_evidence(layout, c.lo[2]), point_evidence(layout, c.hi[2])]),
             subject=layout.entry(i, j))

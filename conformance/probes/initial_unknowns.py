@@ -129,7 +129,8 @@ def initial_dependencies_kind_violated(ctx: ProbeContext, *, rtol: float, margin
             f"{{subject}} is declared 'constant' by <InitialUnknown> '{layout.rows[i].name}' "
             "but changes between points of Initialization Mode: the initial unknown is not "
             "affine in the known", layout.rows[i].location,
-            evidence(_where(s), entry=layout.entry(i, j), kind=c.kind, smallest=c.lo[0],
+            evidence(_where(s), entry=layout.entry(i, j), kind=c.kind,
+                     known_value_reference=layout.cols[j].vr, smallest=c.lo[0],
                      largest=c.hi[0], tolerance=c.tolerance,
                      confirmed=[lo[0], hi[0]], confirm_factor=confirm_factor,
                      points=[point_evidence(layout, c.lo[2]), point_evidence(layout, c.hi[2])]),

@@ -5,7 +5,7 @@ import json
 import math
 from typing import Any
 
-from ..catalogue import Catalogue
+from ..catalogue import Catalogue, default_catalogue
 from ..drafts.detect import DRAFT_LABELS
 from ..findings import Finding, FmuReport, Report, Severity, thaw
 
@@ -27,16 +27,18 @@ def _finite(value: Any) -> Any:
     return value
 
 
-def finding_dict(f: Finding) -> dict[str, Any]:
+def finding_dict(f: Finding, catalogue: Catalogue | None = None) -> dict[str, Any]:
     loc = f.location
+    rule = (catalogue or default_catalogue()).get(f.code)
     return {
         "code": f.code, "name": f.name, "severity": str(f.severity), "message": f.message,
         "file": loc.file, "line": loc.line, "column": loc.column, "path": loc.path,
         "subject": f.subject, "count": f.count, "evidence": plain(f.evidence),
+        "fix": rule.fix_kind if rule is not None else None,
     }
 
 
-def fmu_dict(fmu: FmuReport) -> dict[str, Any]:
+def fmu_dict(fmu: FmuReport, catalogue: Catalogue | None = None) -> dict[str, Any]:
     return {
         "path": fmu.path,
         "draft": fmu.draft,
@@ -44,17 +46,17 @@ def fmu_dict(fmu: FmuReport) -> dict[str, Any]:
         "summary": {str(s): fmu.count(s) for s in (Severity.ERROR, Severity.WARNING,
                                                    Severity.INFO)},
         "info": plain(fmu.info),
-        "findings": [finding_dict(f) for f in fmu.findings],
+        "findings": [finding_dict(f, catalogue) for f in fmu.findings],
         "rules_run": list(fmu.rules_run),
         "rules_skipped": [{"code": c, "reason": r} for c, r in fmu.rules_skipped],
         "rules_not_run": [{"code": c, "reason": r} for c, r in fmu.rules_not_run],
     }
 
 
-def report_dict(report: Report) -> dict[str, Any]:
+def report_dict(report: Report, catalogue: Catalogue | None = None) -> dict[str, Any]:
     out = {
         "tool": "lsdae", "version": report.tool_version, "schema_version": SCHEMA_VERSION,
-        "options": plain(report.options), "fmus": [fmu_dict(f) for f in report.fmus],
+        "options": plain(report.options), "fmus": [fmu_dict(f, catalogue) for f in report.fmus],
     }
     if report.interrupted:  # Ctrl-C: the FMUs above were checked, these were not
         out["interrupted"] = {"not_checked": list(report.not_checked)}
@@ -62,4 +64,4 @@ def report_dict(report: Report) -> dict[str, Any]:
 
 
 def render(report: Report, catalogue: Catalogue | None = None, **_: Any) -> str:
-    return json.dumps(report_dict(report), indent=2, sort_keys=False, ensure_ascii=False) + "\n"
+    return json.dumps(report_dict(report, catalogue), indent=2, sort_keys=False, ensure_ascii=False) + "\n"

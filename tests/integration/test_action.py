@@ -87,7 +87,8 @@ def _run(ws: Path, **inputs: str) -> tuple[int, str, dict[str, str], str]:
     env = {k: v for k, v in os.environ.items() if not k.startswith(("LSDAE_", "GITHUB_"))}
     env.update({"LSDAE_ACTION_SKIP_INSTALL": "1", "GITHUB_STEP_SUMMARY": str(summary),
                 "GITHUB_OUTPUT": str(output), "RUNNER_TEMP": str(ws.parent), "CI": "true",
-                "LSDAE_ACTION_PATH": str(REPO)})
+                "LSDAE_ACTION_PATH": str(REPO),
+                "PYTHONPATH": str(REPO)})   # the lsdae of this checkout, not one installed
     env.update({f"LSDAE_{k.upper()}": v for k, v in inputs.items()})
     done = subprocess.run([sys.executable, str(SCRIPT)], cwd=ws, env=env, capture_output=True,
                           text=True, timeout=300)
@@ -145,3 +146,15 @@ def test_action_usage_errors(workspace, inputs):
     code, log, _, _ = _run(workspace, **inputs)
     assert code == 2
     assert "::error title=lsdae::" in log
+
+
+def test_action_fix_input_writes_the_fixed_fmus_and_the_diff(workspace):
+    manifest = workspace / "fmus" / "good" / "extra/org.fmi-standard.fmi-ls-dae/fmi-ls-manifest.xml"
+    manifest.write_bytes(manifest.read_bytes().replace(b'support in FMI."', b'support in FMI"'))
+    before = manifest.read_bytes()
+    _, log, out, _ = _run(workspace, fmus="fmus/*", probes="false", fix="true")
+    fixed = workspace / out["report-dir"] / "fixed"
+    diff = (fixed / "lsdae-fix.diff").read_text()
+    assert "+++ b/extra/org.fmi-standard.fmi-ls-dae/fmi-ls-manifest.xml" in diff, log
+    assert (fixed / "fmus__good").is_dir()
+    assert manifest.read_bytes() == before          # the repository itself is not changed

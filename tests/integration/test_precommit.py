@@ -26,11 +26,12 @@ def _hooks() -> list[dict]:
 
 def test_hook_manifest_has_what_pre_commit_requires():
     hooks = _hooks()
-    assert [h["id"] for h in hooks] == ["lsdae", "lsdae-static"]
+    assert [h["id"] for h in hooks] == ["lsdae", "lsdae-static", "lsdae-fix"]
     for hook in hooks:
         assert {"id", "name", "entry", "language"} <= set(hook)
         assert hook["language"] == "python"
-        assert hook["entry"].split()[:2] == ["lsdae", "pre-commit"]
+        assert hook["entry"].split()[:2] == (["lsdae", "fix"] if hook["id"] == "lsdae-fix"
+                                             else ["lsdae", "pre-commit"])
         assert hook["require_serial"] is True
 
 

@@ -17,11 +17,11 @@ PACKAGE = Path(__file__).resolve().parents[2] / "conformance"
 FLOORS: list[tuple[str, ...]] = [
     ("__main__",),
     ("cli",),
-    ("simulate_command", "check_command", "rules_command", "exit_codes", "parallel"),
+    ("simulate_command", "fix_command", "check_command", "rules_command", "exit_codes", "parallel"),
     ("simulate_fmu",),
     ("engine",),
     ("engine_options", "collector"),
-    ("checks", "probes"),
+    ("checks", "probes", "fixes"),
     ("simulate",),
     ("runtime", "precommit", "context"),
     ("fmu", "archive_source", "archive_scan", "archive_zip", "archive_folder", "archive_inventory",

@@ -30,8 +30,8 @@ from .catalogue import default_catalogue
 from .exit_codes import EXIT_FINDINGS, EXIT_OK, EXIT_USAGE
 from .findings import Report, Severity
 from .reporters import REPORTER_BY_NAME
-from .simulate_fmu import (RULES_BY_MODE, Simulation, default_experiment, simulate_fmu,
-                           start_values)
+from .simulate_fmu import (RULES_BY_MODE, Simulation, default_experiment, read_model,
+                           simulate_fmu, start_values)
 
 __all__ = ["Simulation", "add_parser", "run", "simulate_fmu", "summary"]
 
@@ -137,12 +137,13 @@ def run(args: argparse.Namespace) -> int:
     if args.rtol is not None and args.rtol >= 1:
         print("lsdae: --rtol must be below 1", file=sys.stderr)
         return EXIT_USAGE
+    model = read_model(path)  # once, for the DefaultExperiment and the start values
     try:
-        given = start_values(path, args.start_value)
+        given = start_values(model, args.start_value)
     except ValueError as exc:
         print(f"lsdae: {exc}", file=sys.stderr)
         return EXIT_USAGE
-    experiment = default_experiment(path)
+    experiment = default_experiment(model)
     options = dict(default_catalogue()["simulation-failed"].option_values)  # the defaults
     tolerance = experiment.get("tolerance")
     rtol = args.rtol or (tolerance if tolerance is not None and 0 < tolerance < 1

@@ -20,7 +20,7 @@ from .catalogue import Catalogue, default_catalogue
 from .engine import EngineOptions, check_fmu
 from .findings import thaw
 from .fmu import MODEL_DESCRIPTION, ArchiveReadError, open_fmu
-from .model import read_model_description
+from .model import ModelDescription, read_model_description
 from .xmlsafe import parse_xml
 
 
@@ -49,49 +49,40 @@ class Simulation:
                                   if c in codes))
 
 
-def default_experiment(path: Path | str) -> dict[str, float]:
-    """The DefaultExperiment's startTime, stopTime and tolerance that are finite numbers, read
-    safely (``{}`` when absent or unreadable)."""
+def read_model(path: Path | str) -> ModelDescription | None:
+    """The FMU's modelDescription.xml, read safely once; None when it cannot be read."""
     source, _ = open_fmu(Path(path))
     if source is None:
-        return {}
+        return None
     with source:
         try:
             data = source.read(MODEL_DESCRIPTION)
         except (KeyError, ArchiveReadError, OSError):
-            return {}
+            return None
     tree, _ = parse_xml(data, file=MODEL_DESCRIPTION)
-    element = tree.getroot().find("DefaultExperiment") if tree is not None else None
-    out: dict[str, float] = {}
-    for key in ("startTime", "stopTime", "tolerance"):
-        try:
-            value = float(element.get(key)) if element is not None else math.nan
-        except (TypeError, ValueError):
-            continue
-        if math.isfinite(value):
-            out[key] = value
-    return out
+    return read_model_description(tree) if tree is not None else None
+
+
+def default_experiment(model: ModelDescription | None) -> dict[str, float]:
+    """The DefaultExperiment's startTime, stopTime and tolerance that are finite numbers."""
+    experiment = model.default_experiment if model is not None else None
+    if experiment is None:
+        return {}
+    values = {"startTime": experiment.start_time, "stopTime": experiment.stop_time,
+              "tolerance": experiment.tolerance}
+    return {k: float(v) for k, v in values.items() if v is not None and math.isfinite(v)}
 
 
 SETTABLE_START = ("input", "parameter")
 
 
-def start_values(path: Path | str, items: list[str]) -> tuple[tuple[str, float], ...]:
-    """``NAME=VALUE`` items as (name, value), checked against modelDescription.xml: the name is
-    a scalar Float64 input or parameter (as fmpy's start_values); ValueError says what is wrong."""
+def start_values(model: ModelDescription | None, items: list[str]
+                 ) -> tuple[tuple[str, float], ...]:
+    """``NAME=VALUE`` items as (name, value), checked against the model: the name is a scalar
+    Float64 input or parameter (as fmpy's start_values); ValueError says what is wrong."""
     if not items:
         return ()
-    source, _ = open_fmu(Path(path))
-    variables = {}
-    if source is not None:
-        with source:
-            try:
-                data = source.read(MODEL_DESCRIPTION)
-            except (KeyError, ArchiveReadError, OSError):
-                data = None
-        tree, _ = parse_xml(data, file=MODEL_DESCRIPTION) if data else (None, [])
-        if tree is not None:
-            variables = {v.name: v for v in read_model_description(tree).variables}
+    variables = {v.name: v for v in model.variables} if model is not None else {}
     out = []
     for item in items:
         name, sep, text = item.partition("=")
@@ -110,11 +101,6 @@ def start_values(path: Path | str, items: list[str]) -> tuple[tuple[str, float],
                              f"can be given (it is a {var.type} {var.causality})")
         out.append((name, value))
     return tuple(out)
-
-
-def default_stop_time(path: Path | str) -> float | None:
-    """The DefaultExperiment's stopTime; None when absent or unreadable."""
-    return default_experiment(path).get("stopTime")
 
 
 def simulation_catalogue(settings: Any, *, time_limit: float | None = None) -> Catalogue:

@@ -7,22 +7,14 @@ correct equations with wrong derivatives.
 """
 from __future__ import annotations
 
-import zipfile
-from pathlib import Path
 
 import pytest
 
 from conformance.catalogue import default_catalogue
-from conformance.manifest import MANIFEST, read_manifest
-from conformance.model import MODEL_DESCRIPTION, read_model_description
-from conformance.runtime.callrecord import CallRecord
-from conformance.runtime.layout import Layout
-from conformance.runtime.library import Library
 from conformance.runtime.modes import start_instance
 from conformance.simulate.integrate import simulate_instance
 from conformance.simulate.jacobian_check import DerivativeCheck, choose_jacobian
 from conformance.simulate.system import DIRECTIONAL, FINITE_DIFFERENCES, FmuDae, FmuOde
-from conformance.xmlsafe import parse_xml
 from scenes.build import build_scene
 from tests.simkit import sim_settings
 
@@ -32,30 +24,6 @@ OPTIONS = default_catalogue()["directional-derivative-mismatch"].option_values
 def _check(verdict: str | None = None) -> DerivativeCheck:
     return DerivativeCheck(rtol=OPTIONS["rtol"], margin=OPTIONS["margin"], ulps=OPTIONS["ulps"],
                            verdict=verdict)
-
-
-@pytest.fixture
-def loaded(tmp_path):
-    """load(scene, *defines) -> (library, layout, model, manifest), extracted into tmp_path."""
-    libraries = []
-
-    def load(scene: str, *defines: str):
-        folder = Path(tmp_path) / "-".join([scene, *defines])
-        with zipfile.ZipFile(build_scene(scene, defines=list(defines))) as zf:
-            zf.extractall(folder)
-        model = read_model_description(parse_xml((folder / MODEL_DESCRIPTION).read_bytes(),
-                                                 file=MODEL_DESCRIPTION)[0],
-                                       file=MODEL_DESCRIPTION)
-        manifest = read_manifest(parse_xml((folder / MANIFEST).read_bytes(), file=MANIFEST)[0],
-                                 draft="alpha1", file=MANIFEST)
-        layout = Layout.build(model, manifest)
-        library = Library(str(folder), layout, CallRecord())
-        libraries.append(library)
-        return library, layout, model, manifest
-
-    yield load
-    for library in libraries:
-        library.free_all()
 
 
 def _system(loaded, mode: str, scene: str, *defines: str):

@@ -3,47 +3,15 @@ in this process (our own scene binaries only): coloured Jacobians from the decla
 directional derivatives against the finite-difference fallback."""
 from __future__ import annotations
 
-import zipfile
-from pathlib import Path
 
 import numpy as np
 import pytest
 
-from conformance.manifest import MANIFEST, read_manifest
-from conformance.model import MODEL_DESCRIPTION, Unknown, read_model_description
+from conformance.model import Unknown
 from conformance.numerics.dae import integrate_dae
-from conformance.runtime.callrecord import CallRecord
-from conformance.runtime.layout import Layout
-from conformance.runtime.library import Library
 from conformance.runtime.modes import start_instance
 from conformance.simulate.system import FINITE_DIFFERENCES, FmuDae, FmuOde, pattern_from
-from conformance.xmlsafe import parse_xml
-from scenes.build import build_scene
 from tests.simkit import sim_settings
-
-
-@pytest.fixture
-def loaded(tmp_path):
-    """(library, layout, model, manifest) of a scene, extracted into tmp_path."""
-    libraries = []
-
-    def load(scene: str):
-        folder = Path(tmp_path) / scene
-        with zipfile.ZipFile(build_scene(scene)) as zf:
-            zf.extractall(folder)
-        model = read_model_description(parse_xml((folder / MODEL_DESCRIPTION).read_bytes(),
-                                                 file=MODEL_DESCRIPTION)[0],
-                                       file=MODEL_DESCRIPTION)
-        manifest = read_manifest(parse_xml((folder / MANIFEST).read_bytes(), file=MANIFEST)[0],
-                                 draft="alpha1", file=MANIFEST)
-        layout = Layout.build(model, manifest)
-        library = Library(str(folder), layout, CallRecord())
-        libraries.append(library)
-        return library, layout, model, manifest
-
-    yield load
-    for library in libraries:
-        library.free_all()
 
 
 def test_pattern_from_dependencies_and_dense_rows_without_them():

@@ -66,6 +66,11 @@ class ProbeContext:
 Probe = Callable[..., Iterable[Violation]]
 
 
+# Facts one family leaves for another (families never import each other): the first finding of
+# the event-indicator probes, which the simulation probes read before blaming runs that
+# root-find on those indicators.
+EVENT_INDICATOR_FAULT = "event_indicators.fault"
+
 # Keys a probe may put into the report's per-FMU ``info`` (through ``ctx.facts["info"]``),
 # read by the HTML reporter for its plots:
 #   "jacobian": {"rows": [names], "cols": [names],

@@ -27,7 +27,7 @@ from ..findings import Location, Violation, evidence
 from ..runtime.instance import Instance, PointNotSet
 from ..runtime.layout import Layout
 from ..unknowns import Unknown
-from .api import FmiError, Point, ProbeContext, ProbeSkipped
+from .api import EVENT_INDICATOR_FAULT, FmiError, Point, ProbeContext, ProbeSkipped
 from .common import close, dae_of, error_evidence, layout_of, root_location, var_location
 
 
@@ -234,16 +234,12 @@ def _tolerance(layout: Layout, vr: int | None, x: float, y: float, rtol: float, 
             "atol": atol, "scale": "nominal or magnitude of the indicator"}
 
 
-# Shared with the simulation probes through ctx.facts (no family imports another): a run that
-# root-finds on indicators this family refuted is not the simulation's to blame.
-FAULT_FACT = "event_indicators.fault"
-
-
 def _noted(code: str, probe: Callable[..., Iterator[Violation]]) -> Callable[..., Any]:
-    """``probe``, recording its first violation in ``ctx.facts[FAULT_FACT]``."""
+    """``probe``, recording its first violation in ``ctx.facts[EVENT_INDICATOR_FAULT]`` (the
+    simulation probes read it)."""
     def run(ctx: ProbeContext, **options: Any) -> Iterator[Violation]:
         for violation in probe(ctx, **options):
-            ctx.facts.setdefault(FAULT_FACT, f"{code}: {violation.message}")
+            ctx.facts.setdefault(EVENT_INDICATOR_FAULT, f"{code}: {violation.message}")
             yield violation
     run.__wrapped__ = probe  # type: ignore[attr-defined]
     run.__signature__ = inspect.signature(probe)  # type: ignore[attr-defined]

@@ -34,7 +34,7 @@ from ..findings import Location, Violation, evidence
 from ..numerics import settings as st
 from ..numerics.compare import compare
 from ..numerics.settings import Settings, Trajectory
-from .api import FmiError, ProbeContext, ProbeSkipped
+from .api import EVENT_INDICATOR_FAULT, FmiError, ProbeContext, ProbeSkipped
 from .common import layout_of, root_location
 from .simulation_runs import (both_runs, points_fail, run, run_evidence, settings_of,
                               simulate_mode)
@@ -136,7 +136,7 @@ def ode_dae_trajectory_mismatch(ctx: ProbeContext, *, factor: float,
     fine."""
     ode = _ode(ctx)
     dae = run(ctx, "dae")
-    fault = ctx.facts.get("event_indicators.fault")  # set by the event-indicator probes
+    fault = ctx.facts.get(EVENT_INDICATOR_FAULT)
     if fault and (dae.has_events or ode.has_events):
         raise ProbeSkipped(f"the runs root-find on event indicators that are faulty in DAE mode "
                            f"({str(fault)[:160]}); that finding is the cause of any gap")

@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 from .catalogue import Catalogue, RuleSpec
-from .drafts.detect import DRAFT_LABELS
+from .drafts.names import DRAFT_LABELS
 
 HEADER = """# lsdae rules
 

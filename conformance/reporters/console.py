@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 from ..catalogue import Catalogue
-from ..drafts.detect import DRAFT_LABELS
+from ..drafts.names import DRAFT_LABELS
 from ..findings import Finding, FmuReport, Report, Severity, thaw
 
 _COLOURS = {Severity.ERROR: "\033[1;31m", Severity.WARNING: "\033[1;33m",

@@ -15,7 +15,7 @@ from html import escape
 from typing import Any, Iterable
 
 from ..catalogue import Catalogue
-from ..drafts.detect import DRAFT_LABELS
+from ..drafts.names import DRAFT_LABELS
 from ..findings import Finding, FmuReport, Report, RunInfo, Severity, thaw
 from . import html_plots
 

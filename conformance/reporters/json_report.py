@@ -6,7 +6,7 @@ import math
 from typing import Any
 
 from ..catalogue import Catalogue, default_catalogue
-from ..drafts.detect import DRAFT_LABELS
+from ..drafts.names import DRAFT_LABELS
 from ..findings import Finding, FmuReport, Report, Severity, thaw
 
 SCHEMA_VERSION = 1

@@ -23,7 +23,7 @@ from datetime import datetime, timezone
 from typing import Any
 
 from ..catalogue import Catalogue
-from ..drafts.detect import DRAFT_LABELS
+from ..drafts.names import DRAFT_LABELS
 from ..findings import Finding, FmuReport, Report, RunInfo, Severity
 from .markdown import plural
 from .sarif import is_baselined

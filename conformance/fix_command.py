@@ -22,6 +22,7 @@ from pathlib import Path
 from typing import Any
 
 from . import __version__
+from .arguments import add_fix_parser as add_parser  # noqa: F401  (the command's grammar)
 from .catalogue import default_catalogue
 from .check_command import exit_code
 from .engine import check_fmu
@@ -34,49 +35,6 @@ from .fixes.fixers import UNSAFE_FIXERS
 from .fmu import default_limits
 from .precommit import fmu_roots
 from .reporters import console
-
-EPILOG = """exit codes:
-  0  nothing at the --fail-on severity (default: error) remains after fixing
-  1  at least one such finding remains
-  2  usage error (no such FMU, no output chosen, -o naming the input without --in-place)
-
-Only safe fixes are applied: those that follow from the files alone (`lsdae rules` marks the
-fixable rules, `lsdae explain RULE` says how). Every other archive member is copied unchanged."""
-
-
-def add_parser(subparsers: Any) -> argparse.ArgumentParser:
-    """Add the ``fix`` subcommand to ``subparsers`` (from ``add_subparsers``)."""
-    p = subparsers.add_parser(
-        "fix", help="repair what can be derived from the files, then re-check",
-        description="Apply the safe fixes to an FMU (.fmu file or unpacked folder) and re-check "
-                    "it.", epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("fmu", metavar="FMU", nargs="+",
-                   help="a .fmu file or an unpacked FMU folder (several with --in-place or "
-                        "--diff)")
-    where = p.add_mutually_exclusive_group()
-    where.add_argument("-o", "--output", metavar="FIXED", help="write the fixed FMU here")
-    where.add_argument("--diff", action="store_true",
-                       help="print a unified diff of every changed file; write nothing")
-    p.add_argument("--in-place", action="store_true", help="overwrite the FMU itself")
-    p.add_argument("--pre-commit", action="store_true",
-                   help="the arguments are changed files (modelDescription.xml, manifests, "
-                        ".fmu): fix the FMUs they belong to in place, and exit 1 when a file "
-                        "changed (the lsdae-fix pre-commit hook)")
-    p.add_argument("--select", action="append", metavar="RULES",
-                   help="only these rules: codes, names or code prefixes, comma-separated")
-    p.add_argument("--ignore", action="append", metavar="RULES", help="skip these rules")
-    p.add_argument("--unsafe-fixes", action="store_true",
-                   help="also apply the fixes from what the probes observed the binary do "
-                        "(add an observed dependency, make an observed kind dependent); they "
-                        "only widen what the manifest claims, each re-checked with the probes")
-    p.add_argument("--no-probes", action="store_true",
-                   help="do not load the binary for the final check (the safe fixes need none)")
-    p.add_argument("--fail-on", choices=("error", "warning", "info", "never"), default="error",
-                   help="the least severity that makes the exit code 1 (default: error)")
-    p.add_argument("--color", choices=("auto", "always", "never"), default="auto",
-                   help="colour the console output (default: auto, on a terminal)")
-    return p
-
 
 def _split(values: list[str] | None) -> tuple[str, ...]:
     return tuple(v.strip() for value in values or () for v in value.split(",") if v.strip())

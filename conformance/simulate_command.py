@@ -26,6 +26,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from .arguments import add_simulate_parser as add_parser
 from .catalogue import default_catalogue
 from .exit_codes import EXIT_FINDINGS, EXIT_OK, EXIT_USAGE
 from .findings import Report, Severity
@@ -34,79 +35,6 @@ from .simulate_fmu import (RULES_BY_MODE, Simulation, default_experiment, read_m
                            simulate_fmu, start_values)
 
 __all__ = ["Simulation", "add_parser", "run", "simulate_fmu", "summary"]
-
-
-def _positive(kind: type) -> Any:
-    def parse(text: str) -> Any:
-        try:
-            value = kind(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
-        if not value > 0:
-            raise argparse.ArgumentTypeError(f"must be positive: {text!r}")
-        return value
-    return parse
-
-
-def _times(text: str) -> tuple[float, ...]:
-    from .numerics.settings import parse_times  # numpy: only when the option is given
-
-    try:
-        return parse_times(text)
-    except ValueError as exc:
-        raise argparse.ArgumentTypeError(str(exc)) from None
-
-
-EPILOG = """exit codes:
-  0  the integration reached the stop time and the trajectory was written
-  1  the integration failed or stopped early (the reason is printed; the trajectory up to
-     where it ended is still written), the simulation found a fault (with --mode both: the DAE
-     and ODE trajectories differ), nothing could be simulated, the output could not be
-     written, or --fail-on was given and a static finding reaches it
-  2  usage error (bad arguments, no such file)
-
-The start time is the DefaultExperiment's startTime (0 without one); the stop time and the
-tolerance are the DefaultExperiment's unless given. Static findings (archive, XML, schema) are
-summarised in one line: `lsdae check FMU` shows them."""
-
-
-def add_parser(subparsers: Any) -> argparse.ArgumentParser:
-    """Add the ``simulate`` subcommand to ``subparsers`` (from ``add_subparsers``)."""
-    p = subparsers.add_parser(
-        "simulate", help="integrate an FMU in DAE mode (IDA) and/or ODE mode (CVODE)",
-        description="Integrate an fmi-ls-dae FMU in DAE mode with SUNDIALS IDA (the FMU's "
-                    "Jacobian), in ODE mode with CVODE, or both and compare them.",
-        epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("fmu", metavar="FMU", help="a .fmu file or an unpacked FMU folder")
-    p.add_argument("--mode", choices=("dae", "ode", "both"), default="dae",
-                   help="DAE mode (default), ODE mode, or both and compare")
-    p.add_argument("--stop-time", type=_positive(float), metavar="T",
-                   help="default: the DefaultExperiment's stopTime, else start + 1")
-    p.add_argument("--rtol", type=_positive(float), default=None, metavar="R",
-                   help="relative tolerance (default: the DefaultExperiment's tolerance, else "
-                        "1e-6); atol = rtol * nominal per variable")
-    p.add_argument("--output-times", type=_times, metavar="t1,t2,...",
-                   help="output times (default: an even grid, see --output-points)")
-    p.add_argument("--output-points", type=_positive(int), default=101, metavar="N",
-                   help="number of evenly spaced output times, start and stop included")
-    p.add_argument("-o", "--output", metavar="CSV",
-                   help="write the trajectory (DAE mode, or ODE mode with --mode ode) here")
-    p.add_argument("--ode-output", metavar="CSV",
-                   help="with --mode both: write the ODE-mode trajectory here")
-    p.add_argument("--start-value", action="append", metavar="NAME=VALUE", default=[],
-                   help="start value of a Float64 input or parameter (repeatable), set before "
-                        "the initialisation; an input keeps it during the run")
-    p.add_argument("--max-steps", type=_positive(int), default=100_000, metavar="N",
-                   help="step budget per mode (default 100000)")
-    p.add_argument("--time-limit", type=_positive(float), default=60.0, metavar="S",
-                   help="wall-clock budget per mode in seconds (default 60)")
-    p.add_argument("--fail-on", choices=("error", "warning"), default=None,
-                   help="also exit 1 when a finding (static or of the simulation) reaches this "
-                        "severity; by default only a failed integration does")
-    p.add_argument("--color", choices=("auto", "always", "never"), default="auto",
-                   help="colour the console output (default: auto, when a terminal)")
-    p.add_argument("-v", "--verbose", action="store_true", help="log what the engine does")
-    return p
 
 
 def _is_simulation_finding(finding: Any) -> bool:

@@ -17,7 +17,8 @@ PACKAGE = Path(__file__).resolve().parents[2] / "conformance"
 FLOORS: list[tuple[str, ...]] = [
     ("__main__",),
     ("cli",),
-    ("simulate_command", "fix_command", "check_command", "rules_command", "exit_codes", "parallel"),
+    ("simulate_command", "fix_command", "check_command", "rules_command", "exit_codes", "parallel",
+     "arguments"),
     ("simulate_fmu",),
     ("engine",),
     ("engine_options", "collector"),
@@ -29,7 +30,7 @@ FLOORS: list[tuple[str, ...]] = [
      "manifest", "layer", "reporters", "ruledocs", "baseline"),
     ("drafts", "catalogue", "config"),
     ("numerics", "model", "unknowns", "bipartite", "matching", "dulmage_mendelsohn", "findings",
-     "paths", "progress", "attributes", "definitions", "structured_names", "__init__"),
+     "paths", "progress", "process_pool", "attributes", "definitions", "structured_names", "__init__"),
 ]
 
 

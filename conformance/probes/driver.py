@@ -25,8 +25,8 @@ from ..findings import Location, Violation, evidence
 from ..runtime.callrecord import CallCounts, CallRecord
 from ..runtime.protocol import Job, violation_from_json
 from ..runtime.supervisor import WorkerProcess
-from .endurance import PROBES as COUNTED
-from .stage import ENTRY, ProbeJob
+from .job import ENTRY, ProbeJob
+from .registry import ENDURANCE as COUNTED
 
 CRASHED, TIMED_OUT, MEMORY, NOT_LOADABLE = (
     "binary-crashed", "binary-timed-out", "binary-memory-limit", "binary-not-loadable")

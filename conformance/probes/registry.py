@@ -1,34 +1,56 @@
 """Probes by rule code: explicit, no discovery magic (like ``conformance.checks.REGISTRY``).
 
-Each family module exposes its own ``PROBES`` dict; :func:`register` merges it here and refuses
-a code registered twice. A new family adds one import and one line at the end of this file; no
-family imports another. The runner emits the ``binary-*`` rules itself; they have no function.
+``FAMILIES`` names each family module and the codes its own ``PROBES`` dict holds (the suite
+checks that the two agree, and that no code is in two families). A family's module, with numpy
+and everything it needs, is imported when one of its probes is first looked up: the parent
+process plans the probe run from the codes alone and never loads a family; the worker loads the
+ones it runs. A new family adds one line here. The runner emits the ``binary-*`` rules itself;
+they have no function.
 """
 from __future__ import annotations
 
-from typing import Mapping
+import importlib
+from typing import TYPE_CHECKING, Iterator, Mapping
 
-from . import (basic, derivatives, dgdw, endurance, evaluation, event_indicators, handshake,
-               importer_paths, initial_unknowns, simulation)
-from .api import Probe
+if TYPE_CHECKING:
+    from .api import Probe
 
-PROBES: dict[str, Probe] = {}
+FAMILIES: dict[str, tuple[str, ...]] = {
+    "handshake": ("DAE710", "DAE711", "DAE712"),
+    "basic": ("DAE720", "DAE721", "DAE722"),
+    "evaluation": ("DAE723", "DAE724", "DAE725"),
+    "derivatives": ("DAE740", "DAE741", "DAE742", "DAE743", "DAE744"),
+    "dgdw": ("DAE745", "DAE746", "DAE747"),
+    "simulation": ("DAE801", "DAE802", "DAE803", "DAE804", "DAE805"),
+    "importer_paths": ("DAE730", "DAE731"),
+    "event_indicators": ("DAE732", "DAE733"),
+    "initial_unknowns": ("DAE750", "DAE751", "DAE752"),
+    "endurance": ("DAE760", "DAE761", "DAE762"),
+}
+
+#: code -> family module name
+FAMILY_OF: dict[str, str] = {code: family for family, codes in FAMILIES.items()
+                             for code in codes}
+
+#: The endurance probes: run last, at the ``--endurance`` level, counted call by call.
+ENDURANCE: frozenset[str] = frozenset(FAMILIES["endurance"])
 
 
-def register(family: Mapping[str, Probe]) -> None:
-    for code, probe in family.items():
-        if code in PROBES:  # pragma: no cover - a defect caught by the tests
-            raise RuntimeError(f"probe {code} registered twice")
-        PROBES[code] = probe
+class _Probes(Mapping[str, "Probe"]):
+    """The probe functions by code, each family module imported on first use."""
+
+    def __getitem__(self, code: str) -> "Probe":
+        family = importlib.import_module(f"{__package__}.{FAMILY_OF[code]}")
+        return family.PROBES[code]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(FAMILY_OF)
+
+    def __len__(self) -> int:
+        return len(FAMILY_OF)
+
+    def __contains__(self, code: object) -> bool:
+        return code in FAMILY_OF
 
 
-register(handshake.PROBES)
-register(basic.PROBES)
-register(evaluation.PROBES)
-register(derivatives.PROBES)
-register(dgdw.PROBES)
-register(simulation.PROBES)
-register(importer_paths.PROBES)
-register(event_indicators.PROBES)
-register(initial_unknowns.PROBES)
-register(endurance.PROBES)
+PROBES: Mapping[str, "Probe"] = _Probes()

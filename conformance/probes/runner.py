@@ -46,8 +46,7 @@ from ..layer import NOT_A_DAE_FMU
 from ..manifest import MANIFEST
 from ..runtime.host import host_platform_tuple, library_extension
 from .driver import RUNNER_RULES, Driver
-from .endurance import PROBES as ENDURANCE
-from .registry import PROBES
+from .registry import ENDURANCE, FAMILY_OF
 
 log = logging.getLogger(__name__)
 
@@ -158,7 +157,7 @@ class _Run:
         for rule in self.rules:
             if rule.name in RUNNER_RULES:
                 continue
-            if rule.code not in PROBES:
+            if rule.code not in FAMILY_OF:
                 self.skip([rule], "not implemented")
             elif rule.code in ENDURANCE and self.endurance == "off":
                 self.skip([rule], "the endurance stage is off (--endurance off)")

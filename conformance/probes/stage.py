@@ -22,7 +22,6 @@ import mmap
 import os
 import sys
 import traceback
-from dataclasses import dataclass, field
 from typing import Any, Callable
 
 import numpy as np
@@ -36,24 +35,9 @@ from ..runtime.modes import start_initialization, start_instance
 from ..runtime.protocol import MEMORY_EXIT, Job, violation_json
 from .api import FmiError, ProbeContext, ProbeSkipped
 from .common import renew_failed
+from .job import ProbeJob
 from .registry import PROBES
 from .sampling import near_points, points_info, start_point
-
-ENTRY = "conformance.probes.stage:run_job"
-
-
-@dataclass
-class ProbeJob:
-    """The payload of a probe job: what the probes run on, and which probes with which options."""
-
-    model: Any                     # ModelDescription
-    manifest: Any                  # Manifest | None
-    draft: str | None
-    seed: int
-    probes: list[tuple[str, str, dict[str, Any]]] = field(default_factory=list)  # code, name, opts
-    endurance: str = "quick"       # the endurance level: "quick" or "long" ("off": not run)
-    died: list[str] = field(default_factory=list)  # probes during which a worker died before
-
 
 def run_job(job: Job, send: Callable[[dict[str, Any]], None]) -> int:
     """The child's entry point: run the probes of ``job``; returns the exit status."""

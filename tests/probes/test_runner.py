@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import dataclasses
+import importlib
 import zipfile
 from pathlib import Path
 
@@ -12,7 +13,7 @@ from conformance.catalogue import Catalogue, default_catalogue
 from conformance.engine import EngineOptions, check_fmu, check_paths
 from conformance.findings import Severity
 from conformance.manifest import MANIFEST
-from conformance.probes import driver, runner
+from conformance.probes import driver, registry, runner
 from conformance.probes.api import Point
 from conformance.probes.registry import PROBES
 from conformance.probes.sampling import near_points, start_point
@@ -72,6 +73,18 @@ def test_probe_registry_matches_probe_catalogue():
     assert set(PROBES) - PROBE_CODES == set(), "probes without a probe-stage catalogue entry"
     assert PROBE_CODES - set(PROBES) - emitted_by_runner == set(), "probe rules nobody runs"
     assert set(PROBES) & emitted_by_runner == set()
+
+
+@pytest.mark.parametrize("family", sorted(registry.FAMILIES))
+def test_each_family_holds_exactly_the_codes_the_registry_names(family):
+    module = importlib.import_module(f"conformance.probes.{family}")
+    assert sorted(module.PROBES) == sorted(registry.FAMILIES[family])
+    assert all(PROBES[code] is module.PROBES[code] for code in module.PROBES)
+
+
+def test_no_code_is_in_two_families():
+    codes = [code for family in registry.FAMILIES.values() for code in family]
+    assert len(codes) == len(set(codes)) == len(PROBES)
 
 
 def test_limits_come_from_the_catalogue():

@@ -29,7 +29,8 @@ FLOORS: list[tuple[str, ...]] = [
      "manifest", "layer", "reporters", "ruledocs", "baseline"),
     ("drafts", "catalogue", "config"),
     ("numerics", "model", "unknowns", "bipartite", "matching", "dulmage_mendelsohn", "findings",
-     "paths", "progress", "attributes", "definitions", "structured_names", "__init__"),
+     "paths", "progress", "attributes", "definitions", "structured_names", "__init__",
+     "report_reader"),
 ]
 
 

@@ -130,6 +130,10 @@ def _check_arguments(check: argparse.ArgumentParser) -> None:
     check.add_argument("--progress", choices=("auto", "always", "never"), default="auto",
                        help="progress on stderr (auto: on a terminal, outside CI, for several "
                             "FMUs or with probes)")
+    check.add_argument("--shard", metavar="I/N", help="check only the I-th of N size-balanced "
+                       "shares of the FMUs (one job of a CI matrix; `lsdae merge` joins them)")
+    check.add_argument("--cache-dir", metavar="DIR", help="keep each FMU's result in DIR, keyed "
+                       "by its content and the settings; an unchanged FMU is not checked again")
 
 
 

@@ -22,6 +22,7 @@ from .reporters import REPORTER_BY_NAME
 from .rules_command import cmd_explain, cmd_rules
 from . import simulate_command
 from . import fix_command
+from . import merge_command
 
 
 EXIT_CODES = """exit codes:
@@ -66,6 +67,7 @@ def _parser() -> argparse.ArgumentParser:
                          help="a rule code (DAE601) or name (algebraic-jacobian-singular)")
     simulate_command.add_parser(sub)
     fix_command.add_parser(sub)
+    merge_command.add_parser(sub, raw, EXIT_CODES)
     return parser
 
 
@@ -139,7 +141,7 @@ def _check_arguments(check: argparse.ArgumentParser) -> None:
 
 COMMANDS = {"check": cmd_check, "pre-commit": cmd_precommit, "rules": cmd_rules,
             "explain": cmd_explain, "simulate": simulate_command.run,
-            "fix": fix_command.run}
+            "fix": fix_command.run, "merge": merge_command.run}
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -187,6 +187,23 @@ def test_a_hit_with_probes_is_the_identical_report(tmp_path, engine_calls):
     assert json.loads(outputs(tmp_path / "first")["json"])["fmus"][0]["findings"]
 
 
+def test_cache_and_shards_together(fmus, tmp_path, engine_calls):
+    """The matrix job's combination: each shard fills and reuses one shared cache."""
+    cache = tmp_path / "cache"
+    for index in (1, 2):
+        lsdae("check", *fmus, "--no-probes", "--shard", f"{index}/2", "--cache-dir", str(cache),
+              "--format", f"json:{tmp_path / f's{index}.json'}")
+    assert sorted(engine_calls) == sorted(fmus)
+    engine_calls.clear()
+    code, _, _ = lsdae("check", *fmus, "--no-probes", "--cache-dir", str(cache),
+                       *every_format(tmp_path / "whole"))
+    assert engine_calls == []
+    merged, _, err = lsdae("merge", str(tmp_path / "s1.json"), str(tmp_path / "s2.json"),
+                           *every_format(tmp_path / "merged"))
+    assert merged == code, err
+    assert outputs(tmp_path / "merged") == outputs(tmp_path / "whole")
+
+
 def test_a_zip_rewritten_with_the_same_bytes_hits(tmp_path):
     """The key is the content, not the file's time stamps."""
     fmu = tmp_path / "a.fmu"

@@ -17,7 +17,8 @@ PACKAGE = Path(__file__).resolve().parents[2] / "conformance"
 FLOORS: list[tuple[str, ...]] = [
     ("__main__",),
     ("cli",),
-    ("simulate_command", "fix_command", "check_command", "rules_command", "exit_codes", "parallel"),
+    ("simulate_command", "fix_command", "check_command", "rules_command", "exit_codes", "parallel",
+     "merge_command"),
     ("fleet",),
     ("simulate_fmu",),
     ("engine",),

@@ -163,7 +163,7 @@ def cmd_check(args: argparse.Namespace) -> int:
     options = _options(args, config)
     settings = _settings(args, config)
     outputs = _outputs(args)
-    baseline = _read_baseline(settings, args)
+    baseline = None if args.shard else _read_baseline(settings, args)  # merge applies it
     durations: dict[str, float] = {}
     started = datetime.now(timezone.utc).replace(microsecond=0).isoformat()
     try:  # --shard and --cache-dir: which FMUs this run checks (conformance/fleet.py)

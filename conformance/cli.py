@@ -133,7 +133,8 @@ def _check_arguments(check: argparse.ArgumentParser) -> None:
                        help="progress on stderr (auto: on a terminal, outside CI, for several "
                             "FMUs or with probes)")
     check.add_argument("--shard", metavar="I/N", help="check only the I-th of N size-balanced "
-                       "shares of the FMUs (one job of a CI matrix; `lsdae merge` joins them)")
+                       "shares of the FMUs (one job of a CI matrix); `lsdae merge` joins the "
+                       "shards' JSON reports and applies the baseline")
     check.add_argument("--cache-dir", metavar="DIR", help="keep each FMU's result in DIR, keyed "
                        "by its content and the settings; an unchanged FMU is not checked again")
 

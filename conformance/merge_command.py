@@ -123,8 +123,8 @@ def _load(file: str) -> _Shard:
         raise UsageError(f"{shard.label} was interrupted ({len(report.not_checked)} FMUs not "
                          "checked): run that shard again")
     if "baseline" in dict(report.options):
-        raise UsageError(f"{shard.label} was written with a baseline: check the shards with "
-                         "--no-baseline and give the baseline to lsdae merge")
+        raise UsageError(f"{shard.label} has a baseline applied; a shard report must not "
+                         "(give the baseline to lsdae merge)")
     positions = shard.info.get("positions")
     if (not isinstance(positions, list) or len(positions) != len(report.fmus)
             or not isinstance(shard.info.get("count"), int)

@@ -154,3 +154,22 @@ def test_merge_exit_codes_follow_check(three, tmp_path):
     lsdae("check", *paths, "--no-probes", "--baseline", str(baseline),
           "--format", f"json:{checked}")
     assert (tmp_path / "m.json").read_text() == checked.read_text()
+
+
+def test_a_shard_applies_no_baseline_the_merge_does(three, tmp_path):
+    _, paths = three
+    baseline = tmp_path / "baseline.json"
+    lsdae("check", *paths, "--no-probes", "--write-baseline", str(baseline), "--format",
+          f"json:{tmp_path / 'w.json'}")
+    shards = _shards(paths, 2, tmp_path, "--no-probes", "--baseline", str(baseline))
+    for shard in shards:
+        data = json.loads(Path(shard).read_text())
+        assert "baseline" not in data["options"]
+        assert not any(f["evidence"].get("baselined") for fmu in data["fmus"]
+                       for f in fmu["findings"] if isinstance(f["evidence"], dict))
+    code, _, _ = lsdae("check", *paths, "--no-probes", "--baseline", str(baseline),
+                       *every_format(tmp_path / "whole"))
+    merged, _, err = lsdae("merge", *shards, "--baseline", str(baseline),
+                           *every_format(tmp_path / "merged"))
+    assert merged == code == 0, err
+    assert outputs(tmp_path / "merged") == outputs(tmp_path / "whole")

@@ -214,3 +214,32 @@ def test_a_zip_rewritten_with_the_same_bytes_hits(tmp_path):
     fmu.unlink()
     fmu.write_bytes(data)
     assert content_hash(fmu) == before
+
+
+def test_hits_and_misses_in_parallel_processes_keep_the_input_order(fmus, tmp_path):
+    cache = tmp_path / "cache"
+    _check(fmus[::3], tmp_path / "some", cache)            # a third of them cached
+    _check(fmus, tmp_path / "pooled", cache, "-j", "2")
+    lsdae("check", *fmus, "--no-probes", *every_format(tmp_path / "plain"))
+    assert outputs(tmp_path / "pooled") == outputs(tmp_path / "plain")
+
+
+def test_an_interrupted_run_keeps_what_it_checked_and_stores_only_that(fmus, tmp_path):
+    from dataclasses import replace
+
+    from conformance.catalogue import default_catalogue
+    from conformance.engine import EngineOptions, check_paths
+    from conformance.fleet import plan
+
+    options, catalogue = EngineOptions(probes=False), default_catalogue()
+    cache = tmp_path / "cache"
+    run = plan(fmus[:4], shard=None, cache_dir=str(cache), options=options,
+               catalogue=catalogue, rule_options={})
+    checked = check_paths(run.todo[:2], options=options, catalogue=catalogue)
+    report = run.finish(replace(checked, not_checked=tuple(run.todo[2:])), {})
+    assert [f.path for f in report.fmus] == fmus[:2]
+    assert report.not_checked == tuple(fmus[2:4])
+    assert len(_entries(cache)) == 2
+    again = plan(fmus[:4], shard=None, cache_dir=str(cache), options=options,
+                 catalogue=catalogue, rule_options={})
+    assert sorted(again.hits) == [0, 1] and again.todo == fmus[2:4]

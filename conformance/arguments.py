@@ -58,6 +58,7 @@ def build_parser() -> argparse.ArgumentParser:
                          help="a rule code (DAE601) or name (algebraic-jacobian-singular)")
     add_simulate_parser(sub)
     add_fix_parser(sub)
+    add_merge_parser(sub)
     return parser
 
 
@@ -122,6 +123,11 @@ def _check_arguments(check: argparse.ArgumentParser) -> None:
     check.add_argument("--progress", choices=("auto", "always", "never"), default="auto",
                        help="progress on stderr (auto: on a terminal, outside CI, for several "
                             "FMUs or with probes)")
+    check.add_argument("--shard", metavar="I/N", help="check only the I-th of N size-balanced "
+                       "shares of the FMUs (one job of a CI matrix); `lsdae merge` joins the "
+                       "shards' JSON reports and applies the baseline")
+    check.add_argument("--cache-dir", metavar="DIR", help="keep each FMU's result in DIR, keyed "
+                       "by its content and the settings; an unchanged FMU is not checked again")
 
 
 def _positive(kind: type) -> Any:
@@ -238,3 +244,34 @@ def add_fix_parser(subparsers: Any) -> argparse.ArgumentParser:
     p.add_argument("--color", choices=("auto", "always", "never"), default="auto",
                    help="colour the console output (default: auto, on a terminal)")
     return p
+
+
+def add_merge_parser(sub: Any) -> None:
+    merge = sub.add_parser(
+        "merge", help="join the JSON reports of `lsdae check --shard I/N` jobs into one report",
+        description="Join the JSON reports of the shards of one run (`lsdae check --shard I/N "
+                    "--format json:FILE`) into the report the unsharded run would have "
+                    "written, in any format, with its exit code.",
+        epilog=EXIT_CODES, formatter_class=argparse.RawDescriptionHelpFormatter)
+    merge.add_argument("reports", nargs="+", metavar="REPORT.json",
+                       help="the JSON report of every shard, 1 to N, in any order")
+    merge.add_argument("--format", action="append", metavar="NAME[:FILE]",
+                       help="output format, as for `lsdae check`, optionally with a file; "
+                            "repeatable. Default: console")
+    merge.add_argument("-o", "--output", metavar="FILE",
+                       help="write the report to FILE (for one --format given without :FILE)")
+    merge.add_argument("--fail-on", choices=FAIL_ON, default=None,
+                       help="the least severity that makes the exit code 1 (default: error)")
+    merge.add_argument("--exit-zero", action="store_true", default=None,
+                       help="exit 0 whatever is found (usage and internal errors still exit 2)")
+    base = merge.add_mutually_exclusive_group()
+    base.add_argument("--baseline", metavar="FILE",
+                      help="accept the findings listed in FILE (lsdae check --write-baseline)")
+    base.add_argument("--no-baseline", action="store_true",
+                      help="ignore the baseline named in [tool.lsdae]")
+    merge.add_argument("--config", type=Path, metavar="PYPROJECT",
+                       help="read [tool.lsdae] from this file instead of the nearest pyproject")
+    merge.add_argument("--color", choices=("auto", "always", "never"), default="auto",
+                       help="colour the console output (default: auto)")
+    merge.add_argument("-v", "--verbose", action="store_true", help="log what merge does")
+    merge.set_defaults(jobs=None, write_baseline=None)

@@ -26,6 +26,7 @@ from .config import ConfigError, load_config
 from .engine import EngineOptions
 from .exit_codes import EXIT_FINDINGS, EXIT_INTERRUPTED, EXIT_OK, EXIT_USAGE, UsageError
 from .findings import Report, RunInfo, Severity
+from .fleet import plan as fleet_plan
 from .parallel import check_all
 from .precommit import fmu_roots
 from .progress import make_progress
@@ -162,20 +163,24 @@ def cmd_check(args: argparse.Namespace) -> int:
     options = _options(args, config)
     settings = _settings(args, config)
     outputs = _outputs(args)
-    baseline = _read_baseline(settings, args)
+    baseline = None if args.shard else _read_baseline(settings, args)  # merge applies it
     durations: dict[str, float] = {}
     started = datetime.now(timezone.utc).replace(microsecond=0).isoformat()
-    progress = make_progress(args.progress, total=len(args.paths), probes=options.probes)
-    try:
-        report = check_all(args.paths, options=options, catalogue=catalogue,
-                           jobs=settings.jobs, progress=progress, durations=durations)
-    except ValueError as exc:  # a bad --select/--ignore pattern
+    try:  # --shard and --cache-dir: which FMUs this run checks (conformance/fleet.py)
+        fleet = fleet_plan(args.paths, shard=args.shard, cache_dir=args.cache_dir,
+                           options=options, catalogue=catalogue,
+                           rule_options=rule_options(args, config))
+        progress = make_progress(args.progress, total=len(fleet.todo), probes=options.probes)
+        report = fleet.finish(check_all(fleet.todo, options=options, catalogue=catalogue,
+                                        jobs=settings.jobs, progress=progress,
+                                        durations=durations), durations)
+    except ValueError as exc:  # a bad --select/--ignore pattern or --shard
         raise UsageError(str(exc)) from None
     run = RunInfo(timestamp=started, hostname=socket.gethostname(),
                   durations=tuple(durations.items()))
     if report.interrupted:
-        print(f"lsdae: interrupted: {len(report.fmus)} of {len(args.paths)} FMUs checked; the "
-              "reports are written for those", file=sys.stderr)
+        print(f"lsdae: interrupted: {len(report.fmus)} of {len(fleet.selected)} FMUs checked; "
+              "the reports are written for those", file=sys.stderr)
     result = None
     if args.write_baseline:
         try:

@@ -2,7 +2,8 @@
 
 The grammar is :mod:`conformance.arguments`. The commands live beside this module:
 :mod:`conformance.check_command` (``check``, ``pre-commit``), :mod:`conformance.rules_command`
-(``rules``, ``explain``), :mod:`conformance.simulate_command` and :mod:`conformance.fix_command`.
+(``rules``, ``explain``), :mod:`conformance.simulate_command`, :mod:`conformance.fix_command` and
+:mod:`conformance.merge_command`.
 Only the command in hand is imported, after the arguments are read: ``lsdae --version`` loads
 no engine, ``lsdae rules`` no XML library, ``lsdae check --no-probes`` no numerical library
 (tests/unit/test_startup_imports.py holds each command to that).
@@ -50,8 +51,14 @@ def _fix(args: argparse.Namespace) -> int:
     return run(args)
 
 
+def _merge(args: argparse.Namespace) -> int:
+    from .merge_command import run  # lazy: each command loads only what it needs
+    return run(args)
+
+
 COMMANDS: dict[str, Command] = {"check": _check, "pre-commit": _precommit, "rules": _rules,
-                                "explain": _explain, "simulate": _simulate, "fix": _fix}
+                                "explain": _explain, "simulate": _simulate, "fix": _fix,
+                                "merge": _merge}
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -157,6 +157,9 @@ class Report:
     fmus: tuple[FmuReport, ...]
     options: Evidence = ()
     not_checked: tuple[str, ...] = ()   # paths left unchecked when the run was interrupted
+    # only in a report of ``lsdae check --shard I/N``: which share of the inputs it holds and
+    # what ``lsdae merge`` needs to put the shards back together (conformance/fleet.py)
+    shard: Evidence = ()
 
     @property
     def interrupted(self) -> bool:

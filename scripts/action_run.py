@@ -13,6 +13,12 @@ Inputs come from environment variables that action.yml sets from the action's in
     LSDAE_REPORT_DIR   where lsdae.json, lsdae.md and lsdae.html go (default lsdae-report)
     LSDAE_FIX          true | false: also run ``lsdae fix`` (safe fixes) on every FMU; the fixed
                        FMUs and lsdae-fix.diff go to <report-dir>/fixed (action.yml uploads it)
+    LSDAE_SHARD        I/N: check only this share of the FMUs (one job of a matrix); the job
+                       leaves annotations and the job summary to the merge
+    LSDAE_MERGE        glob pattern(s) of shard reports: join them with ``lsdae merge`` instead
+                       of checking (the matrix's last job)
+    LSDAE_CACHE        true | false: pass --cache-dir LSDAE_CACHE_DIR to ``lsdae check``
+    LSDAE_CACHE_DIR    the folder actions/cache restores and saves (set by ``--cache-key``)
     LSDAE_ACTION_PATH  the action's checkout, installed with pip
     LSDAE_ACTION_SKIP_INSTALL=1   use the lsdae importable by this Python instead (tests)
 
@@ -21,12 +27,20 @@ runner's Python), runs ``lsdae check`` once with every output, streams the ``git
 stdout (the runner turns those lines into annotations), appends the Markdown summary to
 $GITHUB_STEP_SUMMARY, writes the counts to $GITHUB_OUTPUT, and exits with lsdae's exit code,
 which follows ``fail-on``. Standard library only: it runs before lsdae is installed.
+
+``action_run.py --cache-key`` runs first when the cache is on: it writes the cache folder, the
+key (lsdae's version, the runner's OS, the shard, a digest of the FMUs' content) and the
+restore-keys (the same without the digest: the newest earlier cache) to $GITHUB_OUTPUT for
+actions/cache. lsdae keys every FMU's result itself, so a restored cache never serves a stale
+result; the key only decides which folder is restored and saved.
 """
 from __future__ import annotations
 
 import glob
+import hashlib
 import json
 import os
+import re
 import subprocess
 import sys
 import tempfile
@@ -69,21 +83,73 @@ def _lsdae_command() -> list[str]:
 
 
 def _arguments(fmus: list[str], report_dir: Path, fail_on: str) -> list[str]:
+    if _env("LSDAE_MERGE"):   # the matrix's last job: the shards' reports are the input
+        args = ["merge", *fmus, "--fail-on", fail_on, "--color", "never"]
+        if _env("LSDAE_BASELINE"):
+            args += ["--baseline", _env("LSDAE_BASELINE")]
+        return args + _formats(report_dir)
     args = ["check", *fmus, "--fail-on", fail_on, "--progress", "never", "--color", "never",
-            "--format", "github",
-            "--format", f"json:{report_dir / 'lsdae.json'}",
+            *_formats(report_dir)]
+    for env, flag in (("LSDAE_SELECT", "--select"), ("LSDAE_IGNORE", "--ignore"),
+                      ("LSDAE_BASELINE", "--baseline"), ("LSDAE_SHARD", "--shard")):
+        if _env(env):
+            args += [flag, _env(env)]
+    if _env("LSDAE_PROBES", "true").lower() == "false":
+        args.append("--no-probes")
+    if _env("LSDAE_CACHE").lower() == "true" and _env("LSDAE_CACHE_DIR"):
+        args += ["--cache-dir", _env("LSDAE_CACHE_DIR")]
+    return args
+
+
+def _formats(report_dir: Path) -> list[str]:
+    """The outputs: annotations on stdout (not for a shard: the merge annotates), the JSON,
+    Markdown and HTML reports, and JUnit and SARIF when asked for."""
+    args = [] if _env("LSDAE_SHARD") else ["--format", "github"]
+    args += ["--format", f"json:{report_dir / 'lsdae.json'}",
             "--format", f"markdown:{report_dir / 'lsdae.md'}",
             "--format", f"html:{report_dir / 'lsdae.html'}"]
     for env, fmt in (("LSDAE_JUNIT", "junit"), ("LSDAE_SARIF", "sarif")):
         if _env(env):
             args += ["--format", f"{fmt}:{_env(env)}"]
-    for env, flag in (("LSDAE_SELECT", "--select"), ("LSDAE_IGNORE", "--ignore"),
-                      ("LSDAE_BASELINE", "--baseline")):
-        if _env(env):
-            args += [flag, _env(env)]
-    if _env("LSDAE_PROBES", "true").lower() == "false":
-        args.append("--no-probes")
     return args
+
+
+def _version() -> str:
+    """lsdae's version, read from the action's checkout (lsdae is not installed yet)."""
+    action = Path(_env("LSDAE_ACTION_PATH") or Path(__file__).resolve().parent.parent)
+    try:
+        text = (action / "conformance" / "__init__.py").read_text(encoding="utf-8")
+    except OSError:
+        return "unknown"
+    found = re.search(r'__version__\s*=\s*"([^"]+)"', text)
+    return found.group(1) if found else "unknown"
+
+
+def fmus_digest(fmus: list[str]) -> str:
+    """A digest of the FMUs' names and bytes (files of folders included), in sorted order."""
+    digest = hashlib.sha256()
+    for fmu in sorted(fmus):
+        files = [Path(fmu)] if Path(fmu).is_file() else sorted(
+            p for p in Path(fmu).rglob("*") if p.is_file() and not p.is_symlink())
+        for file in files:
+            digest.update(f"{file.as_posix()}\0".encode("utf-8", "surrogateescape"))
+            try:
+                digest.update(file.read_bytes())
+            except OSError:
+                digest.update(b"unreadable")
+    return digest.hexdigest()[:20]
+
+
+def cache_key() -> int:
+    """``--cache-key``: the folder, key and restore-keys for actions/cache on $GITHUB_OUTPUT."""
+    folder = Path(_env("RUNNER_TEMP") or tempfile.gettempdir()) / "lsdae-cache"
+    shard = re.sub(r"[^0-9]+", "of", _env("LSDAE_SHARD")) or "all"
+    prefix = f"lsdae-{_version()}-{_env('RUNNER_OS') or sys.platform}-{shard}-"
+    key = prefix + fmus_digest(expand(_env("LSDAE_FMUS", "**/*.fmu")))
+    _append("GITHUB_OUTPUT", f"dir={folder}\nkey={key}\n"
+                             f"restore-keys<<LSDAE_EOF\n{prefix}\nLSDAE_EOF\n")
+    print(f"lsdae: cache key {key}", flush=True)
+    return 0
 
 
 def fix_all(lsdae: list[str], fmus: list[str], report_dir: Path) -> Path:
@@ -135,6 +201,8 @@ def _outputs(values: dict[str, object]) -> None:
 
 
 def main() -> int:
+    if sys.argv[1:] == ["--cache-key"]:
+        return cache_key()
     fail_on = _env("LSDAE_FAIL_ON", "error").lower() or "error"
     if fail_on not in FAIL_ON:
         print(f"::error title=lsdae::fail-on must be one of {', '.join(FAIL_ON)}, "
@@ -143,18 +211,23 @@ def main() -> int:
     if _env("LSDAE_PROBES", "true").lower() not in ("true", "false"):
         print("::error title=lsdae::probes must be true or false")
         return EXIT_USAGE
-    fmus = expand(_env("LSDAE_FMUS", "**/*.fmu"))
+    merging = bool(_env("LSDAE_MERGE"))
+    what = "LSDAE_MERGE" if merging else "LSDAE_FMUS"
+    fmus = expand(_env(what, "**/*.fmu"))
     report_dir = Path(_env("LSDAE_REPORT_DIR") or "lsdae-report")
     report_dir.mkdir(parents=True, exist_ok=True)
     if not fmus:
-        print(f"::error title=lsdae::no FMU matches {_env('LSDAE_FMUS', '**/*.fmu')!r}")
+        name = "merge" if merging else "fmus"
+        print(f"::error title=lsdae::no {'shard report' if merging else 'FMU'} matches "
+              f"{_env(what, '**/*.fmu')!r}")
         _outputs({"errors": 0, "warnings": 0, "infos": 0, "baselined": 0, "fmus": 0,
                   "report-dir": report_dir})
-        _append("GITHUB_STEP_SUMMARY", "**lsdae**: no FMU matched the `fmus` pattern.\n")
+        _append("GITHUB_STEP_SUMMARY", f"**lsdae**: nothing matched the `{name}` pattern.\n")
         return EXIT_USAGE
     lsdae = _lsdae_command()
     command = lsdae + _arguments(fmus, report_dir, fail_on)
-    print(f"lsdae: checking {len(fmus)} FMU{'s' if len(fmus) != 1 else ''}", flush=True)
+    print(f"lsdae: {'merging' if merging else 'checking'} {len(fmus)} "
+          f"{'shard report' if merging else 'FMU'}{'s' if len(fmus) != 1 else ''}", flush=True)
     code = subprocess.run(command).returncode
     json_path, md_path = report_dir / "lsdae.json", report_dir / "lsdae.md"
     try:
@@ -166,9 +239,9 @@ def main() -> int:
     values.update({"report-dir": report_dir, "json": json_path, "markdown": md_path,
                    "html": report_dir / "lsdae.html"})
     _outputs(values)
-    if md_path.is_file():
+    if md_path.is_file() and not _env("LSDAE_SHARD"):   # a shard's summary is the merge's
         _append("GITHUB_STEP_SUMMARY", md_path.read_text(encoding="utf-8") + "\n")
-    if _env("LSDAE_FIX").lower() == "true":
+    if _env("LSDAE_FIX").lower() == "true" and not merging:
         fix_all(lsdae, fmus, report_dir)
     return code
 

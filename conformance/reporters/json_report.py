@@ -27,18 +27,25 @@ def _finite(value: Any) -> Any:
     return value
 
 
-def finding_dict(f: Finding, catalogue: Catalogue | None = None) -> dict[str, Any]:
+def finding_dict(f: Finding, catalogue: Catalogue | None = None, *,
+                 snippet: bool = False) -> dict[str, Any]:
+    """One finding; ``snippet`` adds its source line (shard reports and the result cache, so
+    that a report read back shows what the original showed)."""
     loc = f.location
     rule = (catalogue or default_catalogue()).get(f.code)
-    return {
+    out = {
         "code": f.code, "name": f.name, "severity": str(f.severity), "message": f.message,
         "file": loc.file, "line": loc.line, "column": loc.column, "path": loc.path,
         "subject": f.subject, "count": f.count, "evidence": plain(f.evidence),
         "fix": rule.fix_kind if rule is not None else None,
     }
+    if snippet:
+        out["snippet"] = loc.snippet
+    return out
 
 
-def fmu_dict(fmu: FmuReport, catalogue: Catalogue | None = None) -> dict[str, Any]:
+def fmu_dict(fmu: FmuReport, catalogue: Catalogue | None = None, *,
+             snippets: bool = False) -> dict[str, Any]:
     return {
         "path": fmu.path,
         "draft": fmu.draft,
@@ -46,7 +53,7 @@ def fmu_dict(fmu: FmuReport, catalogue: Catalogue | None = None) -> dict[str, An
         "summary": {str(s): fmu.count(s) for s in (Severity.ERROR, Severity.WARNING,
                                                    Severity.INFO)},
         "info": plain(fmu.info),
-        "findings": [finding_dict(f, catalogue) for f in fmu.findings],
+        "findings": [finding_dict(f, catalogue, snippet=snippets) for f in fmu.findings],
         "rules_run": list(fmu.rules_run),
         "rules_skipped": [{"code": c, "reason": r} for c, r in fmu.rules_skipped],
         "rules_not_run": [{"code": c, "reason": r} for c, r in fmu.rules_not_run],
@@ -56,10 +63,13 @@ def fmu_dict(fmu: FmuReport, catalogue: Catalogue | None = None) -> dict[str, An
 def report_dict(report: Report, catalogue: Catalogue | None = None) -> dict[str, Any]:
     out = {
         "tool": "lsdae", "version": report.tool_version, "schema_version": SCHEMA_VERSION,
-        "options": plain(report.options), "fmus": [fmu_dict(f, catalogue) for f in report.fmus],
+        "options": plain(report.options),
+        "fmus": [fmu_dict(f, catalogue, snippets=bool(report.shard)) for f in report.fmus],
     }
     if report.interrupted:  # Ctrl-C: the FMUs above were checked, these were not
         out["interrupted"] = {"not_checked": list(report.not_checked)}
+    if report.shard:  # lsdae check --shard: what lsdae merge needs (docs/json-report.md)
+        out["shard"] = plain(report.shard)
     return out
 
 

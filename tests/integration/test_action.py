@@ -54,7 +54,7 @@ def test_every_input_reaches_the_script():
     from ruamel.yaml import YAML
 
     meta = YAML(typ="safe").load(ACTION.read_text())
-    env = meta["runs"]["steps"][0]["env"]
+    env = next(s for s in meta["runs"]["steps"] if s.get("id") == "check")["env"]
     for name in meta["inputs"]:
         assert f"${{{{ inputs.{name} }}}}" in env.values(), name
     script = SCRIPT.read_text()
@@ -80,7 +80,7 @@ def workspace(tmp_path):
     return ws
 
 
-def _run(ws: Path, **inputs: str) -> tuple[int, str, dict[str, str], str]:
+def _run(ws: Path, *args: str, **inputs: str) -> tuple[int, str, dict[str, str], str]:
     summary, output = ws.parent / "summary.md", ws.parent / "output.txt"
     for f in (summary, output):
         f.write_text("")
@@ -90,9 +90,9 @@ def _run(ws: Path, **inputs: str) -> tuple[int, str, dict[str, str], str]:
                 "LSDAE_ACTION_PATH": str(REPO),
                 "PYTHONPATH": str(REPO)})   # the lsdae of this checkout, not one installed
     env.update({f"LSDAE_{k.upper()}": v for k, v in inputs.items()})
-    done = subprocess.run([sys.executable, str(SCRIPT)], cwd=ws, env=env, capture_output=True,
-                          text=True, timeout=300)
-    values = dict(line.split("=", 1) for line in output.read_text().splitlines() if line)
+    done = subprocess.run([sys.executable, str(SCRIPT), *args], cwd=ws, env=env,
+                          capture_output=True, text=True, timeout=300)
+    values = dict(line.split("=", 1) for line in output.read_text().splitlines() if "=" in line)
     return done.returncode, done.stdout + done.stderr, values, summary.read_text()
 
 
@@ -158,3 +158,76 @@ def test_action_fix_input_writes_the_fixed_fmus_and_the_diff(workspace):
     assert "+++ b/extra/org.fmi-standard.fmi-ls-dae/fmi-ls-manifest.xml" in diff, log
     assert (fixed / "fmus__good").is_dir()
     assert manifest.read_bytes() == before          # the repository itself is not changed
+
+
+def test_action_shards_and_merge_give_the_unsharded_report(workspace):
+    """The matrix of the README: shard jobs, then one merge job over their lsdae.json."""
+    everything = dict(fmus="fmus/* **/*.fmu", probes="false", cache="false")
+    code, _, _, _ = _run(workspace, report_dir="whole", **everything)
+    for index in (1, 2):
+        shard_code, log, out, summary = _run(workspace, report_dir=f"shard{index}",
+                                             shard=f"{index}/2", fail_on="never", **everything)
+        assert shard_code == 0, log
+        assert not re.search(r"^::error ", log, re.M), "a shard job annotates (the merge does)"
+        assert summary == ""
+    merged, log, out, summary = _run(workspace, merge="shard*/lsdae.json", report_dir="merged",
+                                     junit="merged/junit.xml", sarif="merged/lsdae.sarif")
+    assert merged == code == 1, log
+    assert out["fmus"] == "3" and int(out["errors"]) >= 1, out
+    assert re.search(r"^::error ", log, re.M), log
+    assert "fmus/bad" in summary and "deep/er/Packed.fmu" in summary
+    assert (workspace / "merged" / "lsdae.json").read_text() == \
+        (workspace / "whole" / "lsdae.json").read_text()
+    assert (workspace / "merged" / "junit.xml").is_file()
+
+
+def test_action_cache_key(workspace):
+    _, _, first, _ = _run(workspace, "--cache-key", fmus="fmus/*", shard="2/4")
+    assert first["key"].startswith("lsdae-") and "2of4" in first["key"]
+    _, _, again, _ = _run(workspace, "--cache-key", fmus="fmus/*", shard="2/4")
+    assert again["key"] == first["key"]
+    (workspace / "fmus" / "good" / "modelDescription.xml").write_text("<changed/>")
+    _, _, changed, _ = _run(workspace, "--cache-key", fmus="fmus/*", shard="2/4")
+    assert changed["key"] != first["key"]
+    output = (workspace.parent / "output.txt").read_text()
+    prefix = re.search(r"restore-keys<<(\w+)\n(.*)\n\1\n", output).group(2)
+    assert changed["key"].startswith(prefix) and first["key"].startswith(prefix)
+    assert Path(changed["dir"]).is_absolute()
+
+
+def test_action_cache_input_keeps_results_in_the_cache_folder(workspace, tmp_path):
+    cache = tmp_path / "restored-cache"
+    code, log, _, _ = _run(workspace, fmus="fmus/*", probes="false", cache="true",
+                           cache_dir=str(cache))
+    stored = {p: p.stat().st_mtime_ns for p in cache.rglob("*.json")}
+    assert len(stored) == 2, log
+    again, log, _, _ = _run(workspace, fmus="fmus/*", probes="false", cache="true",
+                            cache_dir=str(cache))
+    assert again == code, log
+    assert {p: p.stat().st_mtime_ns for p in cache.rglob("*.json")} == stored, \
+        "the second run wrote its results again: they were not taken from the cache"
+    _run(workspace, fmus="fmus/*", probes="false", cache="false", cache_dir=str(tmp_path / "n"))
+    assert not (tmp_path / "n").exists()
+
+
+@needs_validator
+def test_readme_matrix_workflow_is_valid(tmp_path):
+    """The README's workflow over hundreds of FMUs: shard jobs with the cache, one merge job."""
+    readme = (REPO / "README.md").read_text(encoding="utf-8")
+    section = readme.split("## Checking hundreds of FMUs", 1)[1].split("\n## ", 1)[0]
+    blocks = re.findall(r"```yaml\n(.*?)```", section, re.S)
+    assert blocks, "README's fleet section has no yaml example"
+    workflow = tmp_path / "fleet.yml"
+    workflow.write_text(blocks[0])
+    done = subprocess.run([_check_jsonschema(), "--builtin-schema", "vendor.github-workflows",
+                           str(workflow)], capture_output=True, text=True)
+    assert done.returncode == 0, done.stdout + done.stderr
+    from ruamel.yaml import YAML
+
+    jobs = YAML(typ="safe").load(blocks[0])["jobs"]
+    shards = jobs["check"]["strategy"]["matrix"]["shard"]
+    check = next(s for s in jobs["check"]["steps"] if "shard" in s.get("with", {}))["with"]
+    assert check["shard"] == f"${{{{ matrix.shard }}}}/{len(shards)}"
+    assert check["cache"] == "true"
+    merge = next(s for s in jobs["merge"]["steps"] if "merge" in s.get("with", {}))["with"]
+    assert jobs["merge"]["needs"] == "check" and merge["junit"] and merge["sarif"]

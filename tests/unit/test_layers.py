@@ -18,7 +18,8 @@ FLOORS: list[tuple[str, ...]] = [
     ("__main__",),
     ("cli",),
     ("simulate_command", "fix_command", "check_command", "rules_command", "exit_codes", "parallel",
-     "arguments"),
+     "arguments", "merge_command"),
+    ("fleet",),
     ("simulate_fmu",),
     ("engine",),
     ("engine_options", "collector"),
@@ -27,10 +28,11 @@ FLOORS: list[tuple[str, ...]] = [
     ("runtime", "precommit", "context"),
     ("fmu", "archive_source", "archive_scan", "archive_zip", "archive_folder", "archive_inventory",
      "archive_base", "schemas", "schema_loader", "schema_messages", "xmlsafe", "element_path",
-     "manifest", "layer", "reporters", "ruledocs", "baseline"),
+     "manifest", "layer", "reporters", "ruledocs", "baseline", "result_cache"),
     ("drafts", "catalogue", "config"),
     ("numerics", "model", "unknowns", "bipartite", "matching", "dulmage_mendelsohn", "findings",
-     "paths", "progress", "process_pool", "attributes", "definitions", "structured_names", "__init__"),
+     "paths", "progress", "process_pool", "attributes", "definitions", "structured_names",
+     "__init__", "sharding", "report_reader"),
 ]
 
 

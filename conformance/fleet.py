@@ -18,12 +18,14 @@ import platform
 import sys
 import time
 from dataclasses import dataclass, field, replace
+from pathlib import Path
 from typing import Any, Mapping, Sequence
 
 from . import __version__
 from .catalogue import Catalogue
 from .engine_options import EngineOptions
 from .findings import FmuReport, Report, evidence
+from .paths import schemas_dir
 from .result_cache import ResultCache, content_hash
 from .sharding import assign, input_names, input_size, inputs_digest, parse_shard
 
@@ -51,6 +53,32 @@ def settings_fingerprint(catalogue: Catalogue, options: EngineOptions) -> str:
 def platform_tag() -> str:
     """Where the probes ran: the same FMU's binary may behave (or exist) differently elsewhere."""
     return f"{sys.platform}-{platform.machine()}-py{sys.version_info[0]}.{sys.version_info[1]}"
+
+
+#: The libraries whose behaviour reaches the findings (schemas, parsing, numbers, loading).
+LIBRARIES = ("lxml", "fmpy", "numpy", "scipy", "scikit-sundae")
+
+
+def code_fingerprint() -> str:
+    """A digest of lsdae's own code and schemas and of the libraries' versions: a development
+    checkout keeps its version number across edits, and a cached result must not outlive the
+    code that produced it."""
+    from importlib import metadata  # lazy: only a run with --cache-dir asks
+
+    digest = hashlib.sha256()
+    package = Path(__file__).resolve().parent
+    for root in (package, schemas_dir()):
+        for file in sorted(root.rglob("*")):
+            if file.suffix in (".py", ".xsd") and file.is_file():
+                digest.update(file.relative_to(root).as_posix().encode() + b"\0")
+                digest.update(file.read_bytes())
+    for name in LIBRARIES:
+        try:
+            version = metadata.version(name)
+        except metadata.PackageNotFoundError:
+            version = "-"
+        digest.update(f"{name}={version}\n".encode())
+    return digest.hexdigest()
 
 
 @dataclass
@@ -138,7 +166,7 @@ def plan(paths: Sequence[str], *, shard: str | None, cache_dir: str | None,
                   shard=chosen, settings=settings, catalogue=catalogue_fingerprint(catalogue),
                   rule_options=rule_options, names=names, sizes=sizes)
     if cache_dir is not None:
-        result.cache = ResultCache(cache_dir, f"{settings} {platform_tag()}")
+        result.cache = ResultCache(cache_dir, f"{settings} {code_fingerprint()} {platform_tag()}")
     for position in selected:
         path = paths[position]
         if result.cache is not None:

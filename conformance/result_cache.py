@@ -2,8 +2,9 @@
 
 The key is the FMU's content (sha256 of the ``.fmu`` bytes; for an unpacked folder, of every
 file's relative path and bytes, and of its folders and symbolic links) together with a
-fingerprint of the settings that decide the findings (lsdae's version, the rule catalogue with
-its options, the engine options and the platform, computed by :mod:`conformance.fleet`). An
+fingerprint of what decides the findings (lsdae's version, a digest of its code and schemas and
+of the libraries' versions, the rule catalogue with its options, the engine options and the
+platform, computed by :mod:`conformance.fleet`). An
 unchanged FMU checked with the same settings gets its stored :class:`FmuReport` back and is not
 checked again; one changed byte is another key.
 

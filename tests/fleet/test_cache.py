@@ -10,6 +10,7 @@ from pathlib import Path
 import pytest
 
 import conformance.parallel as parallel
+from conformance import fleet
 from conformance.result_cache import content_hash
 from scenes.build import build_scene
 from tests.fleet.conftest import every_format, lsdae, outputs
@@ -124,6 +125,23 @@ def test_other_settings_miss(fmus, tmp_path, engine_calls, extra):
     engine_calls.clear()
     _check(fmus[:4], tmp_path / "other-again", cache, *extra)
     assert engine_calls == []
+
+
+def test_other_code_misses(fmus, tmp_path, engine_calls, monkeypatch):
+    """A development checkout keeps its version across edits: the code itself is in the key."""
+    cache = tmp_path / "cache"
+    _check(fmus[:2], tmp_path / "first", cache)
+    engine_calls.clear()
+    monkeypatch.setattr(fleet, "code_fingerprint", lambda: "edited")
+    _check(fmus[:2], tmp_path / "edited", cache)
+    assert len(engine_calls) == 2
+
+
+def test_the_code_fingerprint_is_stable_and_follows_the_libraries(monkeypatch):
+    before = fleet.code_fingerprint()
+    assert fleet.code_fingerprint() == before
+    monkeypatch.setattr(fleet, "LIBRARIES", (*fleet.LIBRARIES, "lsdae"))
+    assert fleet.code_fingerprint() != before
 
 
 def _entries(cache: Path) -> list[Path]:

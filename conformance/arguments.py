@@ -106,16 +106,7 @@ def _check_arguments(check: argparse.ArgumentParser) -> None:
                        help="colour the console output (default: auto, on a terminal unless "
                             "NO_COLOR is set)")
     check.add_argument("-v", "--verbose", action="store_true", help="log what the engine does")
-    check.add_argument("--fail-on", choices=FAIL_ON, default=None,
-                       help="the least severity that makes the exit code 1 (default: error)")
-    check.add_argument("--exit-zero", action="store_true", default=None,
-                       help="exit 0 whatever is found (usage and internal errors still exit 2)")
-    base = check.add_mutually_exclusive_group()
-    base.add_argument("--baseline", metavar="FILE",
-                      help="accept the findings listed in FILE: they are shown, marked as "
-                           "baselined, and only new findings decide the exit code")
-    base.add_argument("--no-baseline", action="store_true",
-                      help="ignore the baseline named in [tool.lsdae]")
+    _verdict_arguments(check)
     check.add_argument("--write-baseline", metavar="FILE",
                        help="write this run's findings to FILE as the accepted baseline")
     check.add_argument("-j", "--jobs", type=_jobs, default=None, metavar="N",
@@ -128,6 +119,21 @@ def _check_arguments(check: argparse.ArgumentParser) -> None:
                        "shards' JSON reports and applies the baseline")
     check.add_argument("--cache-dir", metavar="DIR", help="keep each FMU's result in DIR, keyed "
                        "by its content and the settings; an unchanged FMU is not checked again")
+
+
+def _verdict_arguments(parser: argparse.ArgumentParser) -> None:
+    """What decides the exit code, the same for ``check`` and ``merge``."""
+    parser.add_argument("--fail-on", choices=FAIL_ON, default=None,
+                        help="the least severity that makes the exit code 1 (default: error)")
+    parser.add_argument("--exit-zero", action="store_true", default=None,
+                        help="exit 0 whatever is found (usage and internal errors still exit 2)")
+    base = parser.add_mutually_exclusive_group()
+    base.add_argument("--baseline", metavar="FILE",
+                      help="accept the findings listed in FILE (written by --write-baseline): "
+                           "they are shown, marked as baselined, and only new findings decide "
+                           "the exit code")
+    base.add_argument("--no-baseline", action="store_true",
+                      help="ignore the baseline named in [tool.lsdae]")
 
 
 def _positive(kind: type) -> Any:
@@ -260,15 +266,7 @@ def add_merge_parser(sub: Any) -> None:
                             "repeatable. Default: console")
     merge.add_argument("-o", "--output", metavar="FILE",
                        help="write the report to FILE (for one --format given without :FILE)")
-    merge.add_argument("--fail-on", choices=FAIL_ON, default=None,
-                       help="the least severity that makes the exit code 1 (default: error)")
-    merge.add_argument("--exit-zero", action="store_true", default=None,
-                       help="exit 0 whatever is found (usage and internal errors still exit 2)")
-    base = merge.add_mutually_exclusive_group()
-    base.add_argument("--baseline", metavar="FILE",
-                      help="accept the findings listed in FILE (lsdae check --write-baseline)")
-    base.add_argument("--no-baseline", action="store_true",
-                      help="ignore the baseline named in [tool.lsdae]")
+    _verdict_arguments(merge)
     merge.add_argument("--config", type=Path, metavar="PYPROJECT",
                        help="read [tool.lsdae] from this file instead of the nearest pyproject")
     merge.add_argument("--color", choices=("auto", "always", "never"), default="auto",

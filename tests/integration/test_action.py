@@ -36,18 +36,24 @@ def test_action_metadata_is_valid():
     assert done.returncode == 0, done.stdout + done.stderr
 
 
-@needs_validator
-def test_readme_example_workflow_is_valid(tmp_path):
+def _valid_readme_workflow(heading: str, tmp_path) -> str:
+    """The first yaml block of the README section ``heading``, valid as a GitHub workflow."""
     readme = (REPO / "README.md").read_text(encoding="utf-8")
-    section = readme.split("## GitHub Action", 1)[1].split("\n## ", 1)[0]
+    section = readme.split(heading, 1)[1].split("\n## ", 1)[0]
     blocks = re.findall(r"```yaml\n(.*?)```", section, re.S)
-    assert blocks, "README's GitHub Action section has no yaml example"
-    workflow = tmp_path / "lsdae.yml"
+    assert blocks, f"README's section {heading!r} has no yaml example"
+    workflow = tmp_path / "workflow.yml"
     workflow.write_text(blocks[0])
     done = subprocess.run([_check_jsonschema(), "--builtin-schema", "vendor.github-workflows",
                            str(workflow)], capture_output=True, text=True)
     assert done.returncode == 0, done.stdout + done.stderr
-    assert "github/codeql-action/upload-sarif" in blocks[0]
+    return blocks[0]
+
+
+@needs_validator
+def test_readme_example_workflow_is_valid(tmp_path):
+    assert "github/codeql-action/upload-sarif" in _valid_readme_workflow("## GitHub Action",
+                                                                         tmp_path)
 
 
 def test_every_input_reaches_the_script():
@@ -213,18 +219,10 @@ def test_action_cache_input_keeps_results_in_the_cache_folder(workspace, tmp_pat
 @needs_validator
 def test_readme_matrix_workflow_is_valid(tmp_path):
     """The README's workflow over hundreds of FMUs: shard jobs with the cache, one merge job."""
-    readme = (REPO / "README.md").read_text(encoding="utf-8")
-    section = readme.split("## Checking hundreds of FMUs", 1)[1].split("\n## ", 1)[0]
-    blocks = re.findall(r"```yaml\n(.*?)```", section, re.S)
-    assert blocks, "README's fleet section has no yaml example"
-    workflow = tmp_path / "fleet.yml"
-    workflow.write_text(blocks[0])
-    done = subprocess.run([_check_jsonschema(), "--builtin-schema", "vendor.github-workflows",
-                           str(workflow)], capture_output=True, text=True)
-    assert done.returncode == 0, done.stdout + done.stderr
+    workflow = _valid_readme_workflow("## Checking hundreds of FMUs", tmp_path)
     from ruamel.yaml import YAML
 
-    jobs = YAML(typ="safe").load(blocks[0])["jobs"]
+    jobs = YAML(typ="safe").load(workflow)["jobs"]
     shards = jobs["check"]["strategy"]["matrix"]["shard"]
     check = next(s for s in jobs["check"]["steps"] if "shard" in s.get("with", {}))["with"]
     assert check["shard"] == f"${{{{ matrix.shard }}}}/{len(shards)}"

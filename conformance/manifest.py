@@ -145,13 +145,12 @@ def _structure(ms: etree._Element, rname: str, file: str) -> list[Unknown]:
             kind = etree.QName(el).localname
         counters[kind] = counters.get(kind, 0) + 1
         path = f"/{rname}/ModelStructure/{kind}[{counters[kind]}]"
-        formulations = ([f for f in _elements(el) if _local(f) == "Formulation"]
-                        if len(el) else [])
-        if kind == "Residual" and formulations:
-            first = formulations[0]
-            unknown = parse_unknown(first, kind, file, f"{path}/Formulation[1]")
-            out.append(unknown._replace(formulations=len(formulations)))
-        else:
-            out.append(parse_unknown(el, kind, file, path))
+        if kind == "Residual" and len(el):  # a legacy <Residual> with <Formulation> children
+            formulations = [f for f in _elements(el) if _local(f) == "Formulation"]
+            if formulations:
+                unknown = parse_unknown(formulations[0], kind, file, f"{path}/Formulation[1]")
+                out.append(unknown._replace(formulations=len(formulations)))
+                continue
+        out.append(parse_unknown(el, kind, file, path))
     return out
 

@@ -124,7 +124,7 @@ def render_markdown(report: dict[str, Any], results: list[SizeResult]) -> str:
         "- The last two columns are for reference, in the benchmark's own process: a parse of"
         " modelDescription.xml alone and its validation against fmpy's FMI 3 XSD (schema"
         " loaded beforehand).",
-        f"- fmpy runs only up to {fmpy_up_to} variables (`--fmpy-up-to`)." if fmpy_up_to else
+        f"- fmpy runs only for sizes up to {fmpy_up_to} (`--fmpy-up-to`)." if fmpy_up_to else
         "- fmpy runs at every size.",
         "- An `(exit N)` mark means the tool returned a non-zero status (see `static.json`).",
         "",

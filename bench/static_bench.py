@@ -1,22 +1,32 @@
-"""Static benchmark: ``lsdae check --no-probes`` against ``fmpy validate`` on large generated FMUs.
+"""Static benchmark: ``lsdae check --no-probes`` against the XML parse floor and ``fmpy validate``.
 
 For each size, a chain DAE FMU from :mod:`bench.generate` is timed side by side, in one run:
 
 (a) the lsdae console script (``--lsdae-cmd`` + ``--lsdae-args`` + FILE), as a subprocess;
-(b) ``fmpy validate FILE``, as a subprocess, with a per-run timeout (recorded as ``>T``);
-(c) for reference, in process: a bare lxml parse of modelDescription.xml, and lxml validation
-    of the parsed tree against fmpy's FMI 3 XSD (schema loading is not timed).
+(b) ``fmpy validate FILE``, as a subprocess, with a per-run timeout (recorded as ``>T``), for
+    sizes up to ``--fmpy-up-to`` variables (it takes minutes per 100k variables);
+(c) a parse-only process: a subprocess that reads both members from the FMU and parses them
+    with ``lxml.etree.fromstring`` (default parser), keeping both trees, as a checker that
+    holds both documents would. The parse itself, timed inside that fresh process (bytes
+    already read, memory not yet touched, as lsdae finds it), is the parse floor; the
+    process's peak memory is the memory floor;
+(d) for reference, in this process: a parse of modelDescription.xml alone and its lxml
+    validation against fmpy's FMI 3 XSD (schema loading is not timed).
 
-Wall times come from :func:`time.perf_counter` around :func:`subprocess.run`; the table gives
-the median over ``--repeat`` runs. A tool whose first run takes longer than
-``--single-run-above`` seconds (fmpy on 100k variables takes minutes) is run once for that
-size, and the table says so. Writes ``static.md`` and ``static.json`` into ``--out``.
+The numbers to chase are lsdae's time over the parse floor, and lsdae's peak memory (max RSS of
+the process, from :func:`os.wait4`) over the parse-only process's (both from (c)).
+
+Wall times come from :func:`time.perf_counter` around each subprocess; the table gives the
+median over ``--repeat`` runs. A tool whose first run takes longer than ``--single-run-above``
+seconds (fmpy on 100k variables takes minutes) is run once for that size, and the table says
+so. Writes ``static.md`` and ``static.json`` into ``--out``.
 
 Exit status: 0 when the benchmark ran (however slow the tools, whatever they reported),
 2 on harness errors (bad arguments, a tool command that cannot be found, a generated FMU that
 fails the XSD, a failing generator).
 
-    python -m bench.static_bench [--sizes 10000,50000,100000] [--repeat 3] [--out reports/bench]
+    python -m bench.static_bench [--sizes 10000,50000,100000,500000] [--repeat 3]
+                                 [--fmpy-up-to 100000] [--out reports/bench]
 """
 from __future__ import annotations
 
@@ -33,6 +43,7 @@ import statistics
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 import zipfile
 from dataclasses import asdict, dataclass, field
@@ -43,11 +54,13 @@ from typing import Any
 from lxml import etree
 
 from bench import generate as gen
+from bench.static_report import floor_ratio, fmpy_ratio, memory_ratio, render_markdown
 
 logger = logging.getLogger(__name__)
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
-DEFAULT_SIZES = (10_000, 50_000, 100_000)
+DEFAULT_SIZES = (10_000, 50_000, 100_000, 500_000)
+DEFAULT_FMPY_UP_TO = 100_000   # fmpy validate takes minutes per 100k variables
 DEFAULT_LSDAE_ARGS = "check --no-probes --format json -o /dev/null"
 _STDERR_KEEP = 2000  # characters of a failing run's output kept in the JSON
 
@@ -63,6 +76,7 @@ class ToolTiming:
     command: list[str]
     runs_s: list[float] = field(default_factory=list)
     returncodes: list[int] = field(default_factory=list)
+    max_rss_kib: list[int] = field(default_factory=list)  # peak resident memory of each run
     timed_out: bool = False
     single_run: bool = False  # stopped after one run because it was slow
     skipped: bool = False
@@ -71,6 +85,10 @@ class ToolTiming:
     @property
     def median_s(self) -> float | None:
         return statistics.median(self.runs_s) if self.runs_s and not self.timed_out else None
+
+    @property
+    def median_rss_mib(self) -> float | None:
+        return statistics.median(self.max_rss_kib) / 1024 if self.max_rss_kib else None
 
 
 @dataclass
@@ -85,7 +103,9 @@ class SizeResult:
     generate_s: float | None
     lsdae: ToolTiming
     fmpy: ToolTiming
-    lxml_parse_s: list[float] = field(default_factory=list)
+    parse_only: ToolTiming        # the parse-only process (c)
+    parse_floor_s: list[float] = field(default_factory=list)   # (c): both parses, in it
+    lxml_parse_s: list[float] = field(default_factory=list)    # modelDescription.xml alone
     lxml_validate_s: list[float] = field(default_factory=list)
     xsd_valid: bool = True
 
@@ -147,26 +167,74 @@ def _fmpy_xsd() -> Path:
 
 # --- timing -------------------------------------------------------------------------------
 
-def _run_once(argv: list[str], timeout: float, timing: ToolTiming) -> float | None:
-    """Run ``argv`` once; append its time and exit code; None on timeout."""
-    t0 = time.perf_counter()
-    try:
-        proc = subprocess.run(argv, capture_output=True, timeout=timeout, check=False)
-    except subprocess.TimeoutExpired:
-        timing.timed_out = True
+# The parse-only process (c): what any checker must do at least, in a process of its own.
+# It prints the seconds spent in the two parses (the parse floor).
+PARSE_ONLY_SCRIPT = (
+    "import sys, time, zipfile\n"
+    "from lxml import etree\n"
+    "with zipfile.ZipFile(sys.argv[1]) as zf:\n"
+    "    md, manifest = zf.read('modelDescription.xml'), zf.read(sys.argv[2])\n"
+    "t0 = time.perf_counter()\n"
+    "model_tree = etree.fromstring(md)\n"
+    "del md\n"
+    "manifest_tree = etree.fromstring(manifest)\n"
+    "print(f'{time.perf_counter() - t0:.6f}')\n"
+)
+
+
+def _wait(proc: subprocess.Popen, timeout: float) -> tuple[float, int, int] | None:
+    """Wait for ``proc`` with :func:`os.wait4`: (end time, exit status, max RSS in KiB), or
+    None after killing it on timeout. wait4 gives this child's own peak memory, where
+    getrusage(RUSAGE_CHILDREN) would give the largest of all children so far."""
+    done: list[tuple[float, int, int]] = []
+
+    def reap() -> None:
+        _, status, usage = os.wait4(proc.pid, 0)
+        done.append((time.perf_counter(), os.waitstatus_to_exitcode(status), usage.ru_maxrss))
+
+    waiter = threading.Thread(target=reap, daemon=True)
+    waiter.start()
+    waiter.join(timeout)
+    if not done:
+        proc.kill()
+        waiter.join()
+        proc.returncode = done[0][1]
         return None
-    except OSError as exc:
-        raise HarnessError(f"cannot run {argv[0]!r}: {exc}") from exc
-    elapsed = time.perf_counter() - t0
-    timing.runs_s.append(elapsed)
-    timing.returncodes.append(proc.returncode)
-    if proc.returncode != 0 and not timing.output_excerpt:
-        text = (proc.stdout + proc.stderr).decode("utf-8", "replace")
-        timing.output_excerpt = text[:_STDERR_KEEP]
+    proc.returncode = done[0][1]  # reaped here, not by Popen
+    return done[0]
+
+
+def _run_once(argv: list[str], timeout: float, timing: ToolTiming,
+              output: list[str] | None = None) -> float | None:
+    """Run ``argv`` once; append its time, exit code and peak memory, and its output to
+    ``output`` when given; None on timeout."""
+    with tempfile.TemporaryFile() as out:
+        t0 = time.perf_counter()
+        try:
+            proc = subprocess.Popen(argv, stdout=out, stderr=subprocess.STDOUT)
+        except OSError as exc:
+            raise HarnessError(f"cannot run {argv[0]!r}: {exc}") from exc
+        finished = _wait(proc, timeout)
+        if finished is None:
+            timing.timed_out = True
+            return None
+        end, returncode, max_rss_kib = finished
+        elapsed = end - t0
+        timing.runs_s.append(elapsed)
+        timing.returncodes.append(returncode)
+        timing.max_rss_kib.append(max_rss_kib)
+        if output is not None:
+            out.seek(0)
+            output.append(out.read().decode("utf-8", "replace"))
+        if returncode != 0 and not timing.output_excerpt:
+            out.seek(0)
+            timing.output_excerpt = out.read(_STDERR_KEEP * 4).decode("utf-8", "replace")[
+                :_STDERR_KEEP]
     return elapsed
 
 
 def _time_lxml(md: bytes, schema: etree.XMLSchema, repeat: int, result: SizeResult) -> None:
+    """(d): modelDescription.xml parsed and validated in this process, for reference."""
     for _ in range(repeat):
         t0 = time.perf_counter()
         doc = etree.fromstring(md)
@@ -177,6 +245,14 @@ def _time_lxml(md: bytes, schema: etree.XMLSchema, repeat: int, result: SizeResu
         result.lxml_validate_s.append(t2 - t1)
         result.xsd_valid = result.xsd_valid and valid
         del doc
+
+
+def _parse_floor(output: str) -> float:
+    """The seconds the parse-only process printed (its two parses)."""
+    try:
+        return float(output.strip().splitlines()[-1])
+    except (ValueError, IndexError) as exc:
+        raise HarnessError(f"the parse-only process printed {output[:200]!r}") from exc
 
 
 def bench_size(
@@ -190,27 +266,37 @@ def bench_size(
     repeat: int,
     timeout: float,
     single_run_above: float,
+    fmpy_up_to: int | None = None,
 ) -> SizeResult:
-    """Time every tool on one FMU. Tools alternate run by run, so drift hits both alike."""
+    """Time every tool on one FMU. Tools alternate run by run, so drift hits all alike."""
     with zipfile.ZipFile(fmu) as zf:
         md = zf.read("modelDescription.xml")
-        manifest_bytes = zf.getinfo(gen.MANIFEST_PATH).file_size
+        manifest = zf.read(gen.MANIFEST_PATH)
     m = gen.blocks_for(size)
+    n_variables = gen.total_variables(m)
+    fmpy_skipped = fmpy_argv is None or (fmpy_up_to is not None and size > fmpy_up_to)
     lsdae = ToolTiming(command=(lsdae_argv or []) + [str(fmu)], skipped=lsdae_argv is None)
-    fmpy = ToolTiming(command=(fmpy_argv or []) + [str(fmu)], skipped=fmpy_argv is None)
+    fmpy = ToolTiming(command=(fmpy_argv or []) + [str(fmu)], skipped=fmpy_skipped)
+    parse_only = ToolTiming(command=[sys.executable, "-c", PARSE_ONLY_SCRIPT, str(fmu),
+                                     gen.MANIFEST_PATH])
     result = SizeResult(
-        requested=size, n_variables=gen.total_variables(m), n_blocks=m, fmu_path=str(fmu),
+        requested=size, n_variables=n_variables, n_blocks=m, fmu_path=str(fmu),
         fmu_bytes=fmu.stat().st_size, model_description_bytes=len(md),
-        manifest_bytes=manifest_bytes, generate_s=generate_s, lsdae=lsdae, fmpy=fmpy,
+        manifest_bytes=len(manifest), generate_s=generate_s, lsdae=lsdae, fmpy=fmpy,
+        parse_only=parse_only,
     )
     _time_lxml(md, schema, repeat, result)
+    del md, manifest  # the subprocesses below should not share the machine with these bytes
     if not result.xsd_valid:
         raise HarnessError(f"generated FMU {fmu} fails the FMI 3 XSD: {schema.error_log}")
     for r in range(repeat):
-        for name, timing in (("lsdae", lsdae), ("fmpy", fmpy)):
+        for name, timing in (("lsdae", lsdae), ("parse-only", parse_only), ("fmpy", fmpy)):
             if timing.skipped or timing.timed_out or timing.single_run:
                 continue
-            elapsed = _run_once(timing.command, timeout, timing)
+            output: list[str] | None = [] if timing is parse_only else None
+            elapsed = _run_once(timing.command, timeout, timing, output)
+            if output and elapsed is not None:
+                result.parse_floor_s.append(_parse_floor(output[0]))
             shown = f">{timeout:g} s (timeout)" if elapsed is None else f"{elapsed:.2f} s"
             logger.info("%d vars, %s run %d/%d: %s", result.n_variables, name, r + 1, repeat, shown)
             if elapsed is not None and r == 0 and repeat > 1 and elapsed > single_run_above:
@@ -263,82 +349,6 @@ def machine_info() -> dict[str, Any]:
     }
 
 
-def _fmt_tool(t: ToolTiming, timeout: float) -> str:
-    if t.skipped:
-        return "skipped"
-    if t.timed_out:
-        return f">{timeout:g}"
-    if not t.runs_s:
-        return "n/a"
-    median = t.median_s or 0.0
-    text = f"{median:.3f}" if median < 10 else f"{median:.1f}"
-    if t.single_run:
-        text += " (1 run)"
-    bad = sorted({rc for rc in t.returncodes if rc != 0})
-    if bad:
-        text += f" (exit {','.join(map(str, bad))})"
-    return text
-
-
-def _ratio(res: SizeResult, timeout: float) -> tuple[float | None, str]:
-    lsdae, fmpy = res.lsdae.median_s, res.fmpy.median_s
-    if lsdae is None or lsdae <= 0:
-        return None, "n/a"
-    if res.fmpy.timed_out:
-        return None, f">{timeout / lsdae:.1f}"
-    if fmpy is None:
-        return None, "n/a"
-    return fmpy / lsdae, f"{fmpy / lsdae:.1f}"
-
-
-def render_markdown(report: dict[str, Any], results: list[SizeResult]) -> str:
-    cfg, mach = report["config"], report["machine"]
-    timeout = cfg["timeout_s"]
-    lines = [
-        "# Static benchmark: `lsdae check --no-probes` vs `fmpy validate`",
-        "",
-        f"Date: {report['date']}. Sizes: {', '.join(map(str, cfg['sizes']))}."
-        f" Repeat: {cfg['repeat']} (median shown; a tool whose first run took longer than"
-        f" {cfg['single_run_above_s']:g} s ran once, marked \"(1 run)\")."
-        f" Timeout per run: {timeout:g} s (shown as `>T`).",
-        "",
-        "| variables | FMU MB | XML MB | lsdae median s | fmpy median s | ratio fmpy/lsdae"
-        " | lxml parse s | lxml validate s |",
-        "|---:|---:|---:|---:|---:|---:|---:|---:|",
-    ]
-    for res in results:
-        xml_mb = (res.model_description_bytes + res.manifest_bytes) / 1e6
-        lines.append(
-            f"| {res.n_variables} | {res.fmu_bytes / 1e6:.2f} | {xml_mb:.1f}"
-            f" | {_fmt_tool(res.lsdae, timeout)} | {_fmt_tool(res.fmpy, timeout)}"
-            f" | {_ratio(res, timeout)[1]}"
-            f" | {statistics.median(res.lxml_parse_s):.3f}"
-            f" | {statistics.median(res.lxml_validate_s):.3f} |"
-        )
-    lines += [
-        "",
-        "FMUs: chain-structured semi-explicit DAEs from `python -m bench.generate`"
-        f" (naming `{cfg['naming']}`; 4 variables per block plus 6). XML MB is modelDescription"
-        " plus manifest, uncompressed. lsdae and fmpy are wall times of a subprocess"
-        " (interpreter start-up included); the lxml columns are in-process, on modelDescription.xml"
-        " only, with the XSD loaded beforehand. An `(exit N)` mark means the tool returned a"
-        " non-zero status (see `static.json`).",
-        "",
-        f"- lsdae command: `{' '.join(cfg['lsdae_cmd']) or 'skipped'}` FILE",
-        f"- fmpy command: `{' '.join(cfg['fmpy_cmd']) or 'skipped'}` FILE",
-        "",
-        "## Machine",
-        "",
-        f"- CPU: {mach['cpu']} ({mach['logical_cores']} logical cores,"
-        f" {mach['usable_cores']} usable)",
-        f"- OS: {mach['platform']}",
-        f"- Python {mach['python']}, lxml {mach['lxml']} (libxml2 {mach['libxml2']}),"
-        f" fmpy {mach['fmpy']}, lsdae {mach['lsdae']}",
-        "",
-    ]
-    return "\n".join(lines)
-
-
 def _parse_sizes(text: str) -> list[int]:
     sizes = []
     for part in text.split(","):
@@ -360,7 +370,10 @@ def _parser() -> argparse.ArgumentParser:
                                 description=(__doc__ or "").split("\n")[0])
     p.add_argument("--sizes", type=_parse_sizes, default=list(DEFAULT_SIZES),
                    help="comma-separated variable counts, '50k' works"
-                        " (default: 10000,50000,100000)")
+                        " (default: 10000,50000,100000,500000)")
+    p.add_argument("--fmpy-up-to", type=int, default=DEFAULT_FMPY_UP_TO,
+                   help="run fmpy only for sizes (as requested) up to this; 0: every size"
+                        f" (default: {DEFAULT_FMPY_UP_TO})")
     p.add_argument("--repeat", type=int, default=3, help="runs per tool and size (default: 3)")
     p.add_argument("--out", type=Path, default=Path("reports/bench"),
                    help="directory for static.md and static.json (default: reports/bench)")
@@ -400,7 +413,7 @@ def run(args: argparse.Namespace, cache_dir: Path) -> tuple[dict[str, Any], list
         results.append(bench_size(
             size, fmu=fmu, generate_s=generate_s, schema=schema, lsdae_argv=lsdae_argv,
             fmpy_argv=fmpy_argv, repeat=args.repeat, timeout=args.timeout,
-            single_run_above=args.single_run_above,
+            single_run_above=args.single_run_above, fmpy_up_to=args.fmpy_up_to or None,
         ))
     report: dict[str, Any] = {
         "date": dt.datetime.now(dt.timezone.utc).isoformat(timespec="seconds"),
@@ -408,6 +421,7 @@ def run(args: argparse.Namespace, cache_dir: Path) -> tuple[dict[str, Any], list
         "config": {
             "sizes": args.sizes, "repeat": args.repeat, "timeout_s": args.timeout,
             "single_run_above_s": args.single_run_above, "naming": args.naming,
+            "fmpy_up_to": args.fmpy_up_to or None,
             "lsdae_cmd": [_shown(a) for a in lsdae_argv or []],
             "fmpy_cmd": [_shown(a) for a in fmpy_argv or []],
         },
@@ -434,11 +448,14 @@ def main(argv: list[str] | None = None) -> int:
     for res in results:
         entry = asdict(res)
         entry["fmu_path"] = _shown(res.fmu_path)
-        for tool in ("lsdae", "fmpy"):
+        for tool in ("lsdae", "fmpy", "parse_only"):
             entry[tool]["command"] = [_shown(a) for a in entry[tool]["command"]]
-        for tool in ("lsdae", "fmpy"):
             entry[tool]["median_s"] = getattr(res, tool).median_s
-        entry["ratio_fmpy_over_lsdae"] = _ratio(res, timeout)[0]
+            entry[tool]["median_max_rss_mib"] = getattr(res, tool).median_rss_mib
+        entry["ratio_fmpy_over_lsdae"] = fmpy_ratio(res, timeout)[0]
+        entry["parse_floor_median_s"] = statistics.median(res.parse_floor_s)
+        entry["ratio_lsdae_over_parse_floor"] = floor_ratio(res)
+        entry["ratio_lsdae_over_parse_only_peak_rss"] = memory_ratio(res)
         entry["lxml_parse_median_s"] = statistics.median(res.lxml_parse_s)
         entry["lxml_validate_median_s"] = statistics.median(res.lxml_validate_s)
         report["results"].append(entry)

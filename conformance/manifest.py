@@ -85,8 +85,11 @@ def _elements(el: etree._Element | None) -> list[etree._Element]:
 def _ref(el: etree._Element, path: str) -> VrRef:
     raw = el.get("valueReference")
     vr = parse_vr(raw)
-    extra = tuple(sorted((etree.QName(k).localname, v) for k, v in el.attrib.items()
-                         if k != "valueReference"))
+    attrib = el.attrib
+    extra: tuple[tuple[str, str], ...] = ()
+    if len(attrib) > (raw is not None):  # attributes beyond valueReference: rare
+        extra = tuple(sorted((etree.QName(k).localname, v) for k, v in attrib.items()
+                             if k != "valueReference"))
     return VrRef(vr=vr, line=el.sourceline, path=path, element=_local(el),
                  raw=raw if vr is None else None, extra=extra)
 
@@ -134,17 +137,20 @@ def read_manifest(tree: etree._ElementTree, *, draft: str, file: str = MANIFEST)
 def _structure(ms: etree._Element, rname: str, file: str) -> list[Unknown]:
     out: list[Unknown] = []
     counters: dict[str, int] = {}
-    for el in _elements(ms):
-        kind = _local(el)
+    for el in ms:
+        kind = el.tag
+        if not isinstance(kind, str):
+            continue
+        if kind[0] == "{":
+            kind = etree.QName(el).localname
         counters[kind] = counters.get(kind, 0) + 1
         path = f"/{rname}/ModelStructure/{kind}[{counters[kind]}]"
-        formulations = ([f for f in _elements(el) if _local(f) == "Formulation"]
-                        if len(el) else [])
-        if kind == "Residual" and formulations:
-            first = formulations[0]
-            unknown = parse_unknown(first, kind, file, f"{path}/Formulation[1]")
-            out.append(unknown._replace(formulations=len(formulations)))
-        else:
-            out.append(parse_unknown(el, kind, file, path))
+        if kind == "Residual" and len(el):  # a legacy <Residual> with <Formulation> children
+            formulations = [f for f in _elements(el) if _local(f) == "Formulation"]
+            if formulations:
+                unknown = parse_unknown(formulations[0], kind, file, f"{path}/Formulation[1]")
+                out.append(unknown._replace(formulations=len(formulations)))
+                continue
+        out.append(parse_unknown(el, kind, file, path))
     return out
 

@@ -127,10 +127,12 @@ class ModelDescription:
                                           compare=False, hash=False)
 
     def __post_init__(self) -> None:
-        index: dict[int, Variable] = {}
-        for var in self.variables:
-            if var.vr is not None:
-                index.setdefault(var.vr, var)  # duplicates are a finding, the first one wins
+        index = {var.vr: var for var in self.variables if var.vr is not None}
+        if len(index) != sum(var.vr is not None for var in self.variables):
+            index = {}
+            for var in self.variables:
+                if var.vr is not None:
+                    index.setdefault(var.vr, var)  # duplicates are a finding, the first one wins
         object.__setattr__(self, "by_vr", index)
 
     def unknowns(self, kind: str) -> Iterator[Unknown]:
@@ -187,38 +189,56 @@ def _effective(type_: str, causality: str, declared_var: str | None) -> tuple[st
     return found
 
 
-def _variable(el: etree._Element) -> Variable | None:
-    tag = el.tag
-    if not isinstance(tag, str):
-        return None
-    type_ = tag if tag[0] != "{" else etree.QName(el).localname
-    if type_ not in VARIABLE_TYPES:
-        return None
-    get = el.get
-    causality = get("causality", "local")
-    declared_var = get("variability")
-    variability, initial = _effective(type_, causality, declared_var)
-    declared_init = get("initial")
-    start = get("start")
-    dims: tuple[Dimension, ...] = ()
-    aliases: tuple[str, ...] = ()
-    alias_units: tuple[tuple[str, str], ...] = ()
-    if len(el):  # most variables have no children: no lists to build for them
-        start, dims, aliases, alias_units = _children_of_variable(el, start)
-    raw_vr = get("valueReference")
-    vr = parse_vr(raw_vr)
-    derivative = get("derivative")
-    previous = get("previous")
-    return Variable(
-        get("name", ""), vr, type_, causality, variability, declared_init or initial,
-        declared_var, declared_init, start,
-        parse_vr(derivative) if derivative is not None else None,
-        el.sourceline, dims, get("nominal"), get("min"), get("max"),
-        get("description"), get("reinit", "false") in ("true", "1"), get("clocks"),
-        parse_vr(previous) if previous is not None else None,
-        raw_vr if vr is None else None, aliases, get("declaredType"), get("unit"),
-        get("displayUnit"), alias_units,
-    )
+def _variables(container: etree._Element | None) -> list[Variable]:
+    """The variables of ``<ModelVariables>``, in document order.
+
+    One loop without a call per variable but the attribute reads: a modelDescription may hold
+    hundreds of thousands of variables (reports/bench/static.md).
+    """
+    out: list[Variable] = []
+    append = out.append
+    new = tuple.__new__  # skips the NamedTuple's Python-level __new__
+    effective = _DEFAULTS
+    for el in (container if container is not None else ()):
+        tag = el.tag
+        if not isinstance(tag, str):
+            continue
+        type_ = tag if tag[0] != "{" else etree.QName(el).localname
+        if type_ not in VARIABLE_TYPES:
+            continue
+        get = el.get
+        causality = get("causality", "local")
+        declared_var = get("variability")
+        found = effective.get((type_, causality, declared_var))
+        variability, initial = found if found is not None else _effective(
+            type_, causality, declared_var)
+        declared_init = get("initial")
+        start = get("start")
+        dims: tuple[Dimension, ...] = ()
+        aliases: tuple[str, ...] = ()
+        alias_units: tuple[tuple[str, str], ...] = ()
+        if len(el):  # most variables have no children: no lists to build for them
+            start, dims, aliases, alias_units = _children_of_variable(el, start)
+        raw_vr = get("valueReference")
+        if raw_vr is not None and len(raw_vr) < 10 and raw_vr.isdigit() and raw_vr.isascii():
+            vr: int | None = int(raw_vr)
+            raw_vr = None
+        else:
+            vr = parse_vr(raw_vr)
+            if vr is not None:
+                raw_vr = None
+        derivative = get("derivative")
+        previous = get("previous")
+        append(new(Variable, (
+            get("name", ""), vr, type_, causality, variability, declared_init or initial,
+            declared_var, declared_init, start,
+            parse_vr(derivative) if derivative is not None else None,
+            el.sourceline, dims, get("nominal"), get("min"), get("max"),
+            get("description"), get("reinit", "false") in ("true", "1"), get("clocks"),
+            parse_vr(previous) if previous is not None else None,
+            raw_vr, aliases, get("declaredType"), get("unit"), get("displayUnit"), alias_units,
+        )))
+    return out
 
 
 def _children_of_variable(el: etree._Element, start: str | None) -> tuple[
@@ -269,20 +289,16 @@ def read_model_description(tree: etree._ElementTree, *, file: str = MODEL_DESCRI
     if me_el is not None:
         me = ModelExchange(me_el.get("modelIdentifier"), tuple(sorted(me_el.attrib.items())),
                            me_el.sourceline)
-    variables = []
-    mv = _first(root, "ModelVariables")
-    for el in (mv if mv is not None else ()):
-        var = _variable(el)
-        if var is not None:
-            variables.append(var)
+    variables = _variables(_first(root, "ModelVariables"))
     structure = []
     ms = _first(root, "ModelStructure")
     if ms is not None:
         counters: dict[str, int] = {}
         for el in ms:
-            if not isinstance(el.tag, str):
+            tag = el.tag
+            if not isinstance(tag, str):
                 continue
-            kind = etree.QName(el).localname
+            kind = tag if tag[0] != "{" else etree.QName(el).localname
             counters[kind] = counters.get(kind, 0) + 1
             path = f"/fmiModelDescription/ModelStructure/{kind}[{counters[kind]}]"
             structure.append(parse_unknown(el, kind, file, path))

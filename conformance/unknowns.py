@@ -53,28 +53,37 @@ def parse_vr(text: str | None) -> int | None:
 def parse_unknown(el: etree._Element, kind: str, file: str, path: str,
                   attrs: Mapping[str, str] | None = None) -> Unknown:
     """Read valueReference / dependencies / dependenciesKind of a structure element."""
-    a = el.attrib if attrs is None else attrs
-    deps_text = a.get("dependencies")
+    get = el.get if attrs is None else attrs.get
+    deps_text = get("dependencies")
     deps: tuple[int, ...] | None = None
-    bad: list[str] = []
+    bad: tuple[str, ...] = ()
     if deps_text is not None:
         tokens = deps_text.split()
         joined = "".join(tokens)
-        if not joined or (joined.isascii() and joined.isdigit()
+        if not joined or (joined.isdigit() and joined.isascii()
                           and max(map(len, tokens)) <= 9):  # the common case, fast
             deps = tuple(map(int, tokens))
         else:
-            values = []
-            for token in tokens:
-                value = parse_vr(token)
-                if value is not None:
-                    values.append(value)
-                else:
-                    bad.append(token if len(token) <= 40 else token[:37] + "...")
-            deps = tuple(values)
-    kinds_text = a.get("dependenciesKind")
-    kinds = tuple(kinds_text.split()) if kinds_text is not None else None
-    vr = parse_vr(a.get("valueReference"))
-    return Unknown(kind=kind, vr=vr, dependencies=deps,
-                   dependencies_kind=kinds, line=el.sourceline, file=file, path=path,
-                   bad_tokens=tuple(bad), index=a.get("index"))
+            deps, bad = _slow_dependencies(tokens)
+    kinds_text = get("dependenciesKind")
+    raw_vr = get("valueReference")
+    vr = int(raw_vr) if (raw_vr is not None and len(raw_vr) < 10 and raw_vr.isdigit()
+                         and raw_vr.isascii()) else parse_vr(raw_vr)
+    # tuple.__new__ skips the NamedTuple's Python-level __new__: a manifest of 500k variables
+    # builds about a million of these (see reports/bench/static.md).
+    return tuple.__new__(Unknown, (
+        kind, vr, deps, tuple(kinds_text.split()) if kinds_text is not None else None,
+        el.sourceline, file, path, bad, get("index"), 0))
+
+
+def _slow_dependencies(tokens: list[str]) -> tuple[tuple[int, ...], tuple[str, ...]]:
+    """The dependency values that parse, and the tokens that do not (clipped for display)."""
+    values = []
+    bad = []
+    for token in tokens:
+        value = parse_vr(token)
+        if value is not None:
+            values.append(value)
+        else:
+            bad.append(token if len(token) <= 40 else token[:37] + "...")
+    return tuple(values), tuple(bad)

@@ -56,6 +56,12 @@ def continuous_states(model: ModelDescription, manifest: Manifest | None) -> fro
     return frozenset(states)
 
 
+def states_of(ctx: CheckContext) -> frozenset[int]:
+    """:func:`continuous_states` of the context's model and manifest, computed once per FMU."""
+    assert ctx.model is not None
+    return ctx.memo("continuous-states", lambda: continuous_states(ctx.model, ctx.manifest))
+
+
 def element_count(model: ModelDescription, var: Variable) -> int | None:
     """Number of scalar elements of ``var`` (1 for a scalar), or None when a size is unknown.
 
@@ -101,7 +107,7 @@ def _classified(ctx: CheckContext, wanted: str) -> Iterator[tuple[VrRef, Variabl
         return
 
     def classifier() -> Callable[[Variable], str | None]:
-        states = continuous_states(model, manifest)
+        states = states_of(ctx)
         residuals = resolved_vrs(model, manifest.residuals)
         return lambda var: algebraic_problem(var, states=states, residuals=residuals)
 

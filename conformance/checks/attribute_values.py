@@ -10,9 +10,16 @@ from __future__ import annotations
 
 from typing import Iterator
 
-from ..attributes import MIN_ABOVE_MAX, NOMINAL_NOT_POSITIVE, NOT_FINITE, attribute_problems
+from ..attributes import (
+    MIN_ABOVE_MAX,
+    NOMINAL_NOT_POSITIVE,
+    NOT_FINITE,
+    Problem,
+    attribute_problems,
+)
 from ..context import Check, CheckContext
 from ..findings import Violation, evidence
+from ..model import FLOAT_TYPES, ModelDescription, Variable
 from .model_analysis import var_loc
 
 _ADVICE = {
@@ -23,22 +30,29 @@ _ADVICE = {
 }
 
 
+def _problems(model: ModelDescription) -> dict[str, list[tuple[Variable, Problem]]]:
+    """Every problem of every Float variable, by rule, in document order: one pass shared by
+    the three rules."""
+    found: dict[str, list[tuple[Variable, Problem]]] = {}
+    for var in model.variables:
+        if var.type not in FLOAT_TYPES or (var.start is None and var.nominal is None
+                                           and var.minimum is None and var.maximum is None):
+            continue
+        for problem in attribute_problems(var.start, var.nominal, var.minimum, var.maximum):
+            found.setdefault(problem.rule, []).append((var, problem))
+    return found
+
+
 def _violations(ctx: CheckContext, rule: str) -> Iterator[Violation]:
     if (model := ctx.model) is None:
         return
-    for var in model.variables:
-        if not var.is_float or (var.start is None and var.nominal is None
-                                and var.minimum is None and var.maximum is None):
-            continue
-        for problem in attribute_problems(var.start, var.nominal, var.minimum, var.maximum):
-            if problem.rule != rule:
-                continue
-            shown = "min > max" if rule == MIN_ABOVE_MAX else problem.attribute
-            yield Violation(
-                f"{{subject}}: {shown} = {problem.text!r}; {_ADVICE[rule]}",
-                var_loc(model, var),
-                evidence(attribute=problem.attribute, value=problem.text, type=var.type),
-                subject=var.name)
+    for var, problem in ctx.memo("attribute-problems", lambda: _problems(model)).get(rule, ()):
+        shown = "min > max" if rule == MIN_ABOVE_MAX else problem.attribute
+        yield Violation(
+            f"{{subject}}: {shown} = {problem.text!r}; {_ADVICE[rule]}",
+            var_loc(model, var),
+            evidence(attribute=problem.attribute, value=problem.text, type=var.type),
+            subject=var.name)
 
 
 def float_attribute_not_finite(ctx: CheckContext) -> Iterator[Violation]:

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from ..context import CheckContext
 from ..manifest import Manifest
 from ..model import ModelDescription, Variable
 
@@ -38,6 +39,12 @@ class DaeRoles:
             algebraic=frozenset(a.vr for a in manifest.algebraic if a.vr is not None),
             states=frozenset(states), derivatives=frozenset(derivatives),
             residuals=frozenset(u.vr for u in manifest.residuals if u.vr is not None))
+
+
+def roles_of(ctx: CheckContext) -> DaeRoles:
+    """:meth:`DaeRoles.of` the context's model and manifest, computed once per FMU."""
+    assert ctx.model is not None and ctx.manifest is not None
+    return ctx.memo("dae-roles", lambda: DaeRoles.of(ctx.model, ctx.manifest))
 
 
 def describe(var: Variable, roles: DaeRoles) -> str:

@@ -17,7 +17,7 @@ from ..drafts.detect import FORMULATION, LS_DAE_ROOT
 from ..findings import Location, Violation, evidence
 from ..model import ModelDescription, Variable
 from ..unknowns import Unknown
-from .dae_roles import DaeRoles, describe
+from .dae_roles import DaeRoles, describe, roles_of
 
 log = logging.getLogger(__name__)
 
@@ -98,17 +98,30 @@ def dependency_not_allowed_known(ctx: CheckContext) -> Iterator[Violation]:
     """Each dependency is a known the element kind may have (DAE-34, MS-10, MS-11, D-06)."""
     model, manifest = ctx.model, ctx.manifest
     assert model is not None and manifest is not None
-    roles = DaeRoles.of(model, manifest)
+    roles = roles_of(ctx)
     verdicts: dict[tuple[str, int], bool] = {}  # (element kind, known) -> allowed; few distinct
+    # Per element kind, knowns already found allowed: most elements depend only on these, and
+    # a set test decides them without a loop. Algebraic variables are allowed for every kind,
+    # states for every kind but InitialUnknown (see _allowed).
+    allowed_knowns = {kind: set(roles.algebraic) if kind == "InitialUnknown"
+                      else set(roles.algebraic | roles.states) for kind in _CHECKED_KINDS}
     for u in manifest.structure:
         if u.kind not in _CHECKED_KINDS:
             continue  # EventIndicator/ClockedState dependencies are for debugging (MS-12)
-        for vr in dict.fromkeys(u.dependencies or ()):
+        deps = u.dependencies
+        if not deps:
+            continue
+        known_ok = allowed_knowns[u.kind]
+        if known_ok.issuperset(deps):
+            continue
+        for vr in dict.fromkeys(deps):
             key = (u.kind, vr)
             ok = verdicts.get(key)
             if ok is None:
                 known = model.by_vr.get(vr)
                 ok = verdicts[key] = known is None or _allowed(u.kind, known, roles, ctx.draft)
+                if ok:
+                    known_ok.add(vr)
             if ok:
                 continue
             known = model.by_vr[vr]

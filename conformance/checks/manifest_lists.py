@@ -13,7 +13,7 @@ from typing import Iterator
 from ..context import Check, CheckContext
 from ..findings import Location, Violation, evidence
 from ..unknowns import Unknown
-from .dae_roles import DaeRoles, describe
+from .dae_roles import describe, roles_of
 
 
 def _unresolved(u: Unknown) -> Violation:
@@ -34,7 +34,7 @@ def initial_unknown_not_allowed(ctx: CheckContext) -> Iterator[Violation]:
     """Manifest InitialUnknowns are core ones or algebraic variables (MS-05, D-10, Q-06)."""
     model, manifest = ctx.model, ctx.manifest
     assert model is not None and manifest is not None
-    roles = DaeRoles.of(model, manifest)
+    roles = roles_of(ctx)
     for u in manifest.unknowns("InitialUnknown"):
         var = model.by_vr.get(u.vr) if u.vr is not None else None
         if var is None:
@@ -117,7 +117,7 @@ def output_set_mismatch(ctx: CheckContext) -> Iterator[Violation]:
     if not listed:
         return  # an absent Output list is inherited from modelDescription.xml (Q-02)
     outputs = {v.vr: v for v in model.variables if v.causality == "output" and v.vr is not None}
-    roles = DaeRoles.of(model, manifest)
+    roles = roles_of(ctx)
     seen = set()
     for u in listed:
         var = model.by_vr.get(u.vr) if u.vr is not None else None

@@ -61,9 +61,11 @@ def enable_vrs(ctx: CheckContext) -> frozenset[int]:
     generic core rules, which leave them alone."""
     if ctx.manifest is None or ctx.model is None:
         return frozenset()
-    names = {v.name: v.vr for v in ctx.model.variables}
-    vrs = {ref.vr if ref.vr is not None else names.get(ref.name or "")
-           for ref in ctx.manifest.enables}
+    model, enables = ctx.model, ctx.manifest.enables
+    vrs = {ref.vr for ref in enables if ref.vr is not None}
+    if any(ref.vr is None for ref in enables):  # an old draft names it: look the name up
+        names = {v.name: v.vr for v in model.variables}
+        vrs.update(names.get(ref.name or "") for ref in enables if ref.vr is None)
     return frozenset(vr for vr in vrs if vr is not None)
 
 

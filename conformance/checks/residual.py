@@ -22,7 +22,7 @@ from ..findings import Location, Violation, evidence
 from ..manifest import VrRef
 from ..model import Variable
 from ..unknowns import Unknown
-from .algebraic import continuous_states, element_count, resolved_vrs
+from .algebraic import element_count, resolved_vrs, states_of
 from .dae_form import fully_implicit
 from .listing import classified, facts, first_listings, repeats
 
@@ -57,7 +57,7 @@ def _classified(ctx: CheckContext, wanted: str) -> Iterator[tuple[Unknown, Varia
                 if res.vr not in algebraic)
 
     def classifier() -> Callable[[Variable], str | None]:
-        states = continuous_states(model, manifest)
+        states = states_of(ctx)
         return lambda var: residual_problem(var, states=states)
 
     yield from classified(ctx, "residual-classes", wanted, listed, classifier)

@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import Iterator, Sequence
 
 from . import __version__
+from .background import Background
 from .catalogue import Catalogue, default_catalogue
 from .checks import REGISTRY
 from .collector import Collector
@@ -229,9 +230,14 @@ def _read_model(source, names: Sequence[str], options: EngineOptions, collector:
             evidence(fmi_version=version)))
         state.not_checked = f"FMI {version} FMU: fmi-ls-dae needs FMI 3.0"
         return None
-    if not options.probes_only:
-        collector.add_stage(validate_model_description(tree))
-    return read_model_description(tree, file=MODEL_DESCRIPTION)
+    if options.probes_only:
+        return read_model_description(tree, file=MODEL_DESCRIPTION)
+    # the XSD validation (libxml2, without the GIL) runs beside the reading of the same tree
+    validation = Background(lambda: list(validate_model_description(tree)))
+    try:
+        return read_model_description(tree, file=MODEL_DESCRIPTION)
+    finally:
+        collector.add_stage(validation.result())
 
 
 def _read_manifest(source, names: Sequence[str], options: EngineOptions, collector: Collector,
@@ -252,10 +258,14 @@ def _read_manifest(source, names: Sequence[str], options: EngineOptions, collect
     if draft == UNKNOWN:
         collector.add_stage(unrecognised_violations(tree.getroot(), file=MANIFEST))
         return None
-    if not options.probes_only:
-        collector.add_stage(validate_manifest(tree, draft, file=MANIFEST))
+    if options.probes_only:
+        return read_manifest(tree, draft=draft, file=MANIFEST)
+    validation = Background(lambda: list(validate_manifest(tree, draft, file=MANIFEST)))
+    try:
+        return read_manifest(tree, draft=draft, file=MANIFEST)
+    finally:
+        collector.add_stage(validation.result())
         collector.add_stage(legacy_violations(tree.getroot(), draft, file=MANIFEST))
-    return read_manifest(tree, draft=draft, file=MANIFEST)
 
 
 def _run_static(ctx: CheckContext, catalogue: Catalogue, selection: RuleSelection,

@@ -7,9 +7,8 @@ with a count, and adds the source line each finding points at (:class:`LineCache
 from __future__ import annotations
 
 import re
-
 from dataclasses import replace
-from typing import Iterable
+from typing import Iterable, Protocol
 
 from .catalogue import RuleSpec
 from .engine_options import RuleSelection
@@ -19,10 +18,17 @@ GROUP_SHOWN = 5
 START_TAG_LOOKBACK = 200  # lines searched upwards for the '<' that starts a tag
 
 
+class Texts(Protocol):
+    """The bytes of the files findings point into (:class:`conformance.source_texts.SourceTexts`,
+    or a plain dict)."""
+
+    def get(self, name: str, /) -> bytes | None: ...
+
+
 class Collector:
     """Accumulates violations per rule and turns them into grouped, located findings."""
 
-    def __init__(self, selection: RuleSelection, texts: dict[str, bytes], threshold: int):
+    def __init__(self, selection: RuleSelection, texts: Texts, threshold: int):
         self.selection = selection
         self.texts = texts
         self.threshold = threshold
@@ -104,7 +110,7 @@ def plural_subject(message: str, phrase: str) -> str:
 
 
 class LineCache:
-    def __init__(self, texts: dict[str, bytes]):
+    def __init__(self, texts: Texts):
         self.texts = texts
         self.lines: dict[str, list[bytes]] = {}
 
@@ -115,9 +121,12 @@ class LineCache:
         text, so the nearest line at or above it that holds a '<' is where the tag begins.
         Done here, for the few lines findings point at, not for every element when parsing.
         """
-        if not loc.file or not loc.line or loc.file not in self.texts:
+        if not loc.file or not loc.line:
             return loc
-        lines = self.lines.setdefault(loc.file, self.texts[loc.file].split(b"\n"))
+        if loc.file not in self.lines:
+            data = self.texts.get(loc.file)
+            self.lines[loc.file] = data.split(b"\n") if data is not None else []
+        lines = self.lines[loc.file]
         if loc.line > len(lines):
             return loc
         line = loc.line

@@ -36,6 +36,7 @@ from .schemas import (
     validate_manifest,
     validate_model_description,
 )
+from .source_texts import SourceTexts
 from .xmlsafe import parse_xml
 
 log = logging.getLogger(__name__)
@@ -48,12 +49,13 @@ def check_fmu(path: Path, *, options: EngineOptions = EngineOptions(),
     """Check one FMU (file or folder) and return its frozen report."""
     catalogue = catalogue or default_catalogue()
     selection = RuleSelection(catalogue, options)
-    texts: dict[str, bytes] = {}
+    limits = ArchiveLimits.from_options(catalogue["archive-too-large"].option_values)
+    texts = SourceTexts(Path(path), limits)
     collector = Collector(selection, texts, options.group_threshold)
     state = _State()
     try:
         with _cyclic_gc_paused():
-            _run(Path(path), options, catalogue, selection, collector, texts, state)
+            _run(Path(path), limits, options, catalogue, selection, collector, texts, state)
     except Exception as exc:  # a defect of ours: report it, keep everything found so far
         log.debug("internal error while checking %s", path, exc_info=True)
         collector.emit("internal-error", Violation(
@@ -111,9 +113,9 @@ class _State:
         return reason
 
 
-def _run(path: Path, options: EngineOptions, catalogue: Catalogue, selection: RuleSelection,
-         collector: Collector, texts: dict[str, bytes], state: _State) -> None:
-    limits = ArchiveLimits.from_options(catalogue["archive-too-large"].option_values)
+def _run(path: Path, limits: ArchiveLimits, options: EngineOptions, catalogue: Catalogue,
+         selection: RuleSelection, collector: Collector, texts: SourceTexts,
+         state: _State) -> None:
     source, violations = open_fmu(path, limits=limits)
     collector.add_stage(violations)
     if source is None:
@@ -185,13 +187,13 @@ def _read(source, name: str, collector: Collector) -> bytes | None:
     return None
 
 
-def _read_xml(source, name: str, collector: Collector, texts: dict[str, bytes]):
+def _read_xml(source, name: str, collector: Collector, texts: SourceTexts):
     """Read and safely parse one XML member; keep its bytes for source excerpts. The manifest
     is read as importers read it when its only fault is an undeclared fmi-ls prefix."""
     data = _read(source, name, collector)
     if data is None:
         return None
-    texts[name] = data
+    texts.keep(name, data)
     tree, violations = parse_xml(data, file=name, bind_prefixes=name == MANIFEST)
     collector.add_stage(violations)
     return tree
@@ -209,7 +211,7 @@ def _not_read(source, name: str, need: str, info_key: str, state: _State) -> boo
 
 
 def _read_model(source, names: Sequence[str], options: EngineOptions, collector: Collector,
-                texts: dict[str, bytes], state: _State) -> ModelDescription | None:
+                texts: SourceTexts, state: _State) -> ModelDescription | None:
     if MODEL_DESCRIPTION not in names:
         if not _not_read(source, MODEL_DESCRIPTION, "model-description", "modelDescription",
                          state):
@@ -241,7 +243,7 @@ def _read_model(source, names: Sequence[str], options: EngineOptions, collector:
 
 
 def _read_manifest(source, names: Sequence[str], options: EngineOptions, collector: Collector,
-                   texts: dict[str, bytes], state: _State,
+                   texts: SourceTexts, state: _State,
                    model: ModelDescription | None) -> Manifest | None:
     if MANIFEST not in names:
         if _not_read(source, MANIFEST, "manifest", "manifest", state):

@@ -28,7 +28,7 @@ FLOORS: list[tuple[str, ...]] = [
     ("runtime", "precommit", "context"),
     ("fmu", "archive_source", "archive_scan", "archive_zip", "archive_folder", "archive_inventory",
      "archive_base", "schemas", "schema_loader", "schema_messages", "xmlsafe", "element_path",
-     "manifest", "layer", "reporters", "ruledocs", "baseline", "result_cache"),
+     "manifest", "layer", "reporters", "ruledocs", "baseline", "result_cache", "source_texts"),
     ("drafts", "catalogue", "config"),
     ("numerics", "model", "unknowns", "bipartite", "matching", "dulmage_mendelsohn", "findings",
      "paths", "progress", "process_pool", "background", "attributes", "definitions", "structured_names",

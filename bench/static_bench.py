@@ -46,7 +46,7 @@ import tempfile
 import threading
 import time
 import zipfile
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict
 from importlib import metadata
 from pathlib import Path
 from typing import Any
@@ -54,7 +54,8 @@ from typing import Any
 from lxml import etree
 
 from bench import generate as gen
-from bench.static_report import floor_ratio, fmpy_ratio, memory_ratio, render_markdown
+from bench.static_report import (SizeResult, ToolTiming, floor_ratio, fmpy_ratio, memory_ratio,
+                                 render_markdown)
 
 logger = logging.getLogger(__name__)
 
@@ -67,47 +68,6 @@ _STDERR_KEEP = 2000  # characters of a failing run's output kept in the JSON
 
 class HarnessError(Exception):
     """The benchmark itself cannot run or its input is wrong (exit status 2)."""
-
-
-@dataclass
-class ToolTiming:
-    """Timings of one external command on one FMU."""
-
-    command: list[str]
-    runs_s: list[float] = field(default_factory=list)
-    returncodes: list[int] = field(default_factory=list)
-    max_rss_kib: list[int] = field(default_factory=list)  # peak resident memory of each run
-    timed_out: bool = False
-    single_run: bool = False  # stopped after one run because it was slow
-    skipped: bool = False
-    output_excerpt: str = ""  # stdout+stderr of the first run with a non-zero exit
-
-    @property
-    def median_s(self) -> float | None:
-        return statistics.median(self.runs_s) if self.runs_s and not self.timed_out else None
-
-    @property
-    def median_rss_mib(self) -> float | None:
-        return statistics.median(self.max_rss_kib) / 1024 if self.max_rss_kib else None
-
-
-@dataclass
-class SizeResult:
-    requested: int
-    n_variables: int
-    n_blocks: int
-    fmu_path: str
-    fmu_bytes: int
-    model_description_bytes: int
-    manifest_bytes: int
-    generate_s: float | None
-    lsdae: ToolTiming
-    fmpy: ToolTiming
-    parse_only: ToolTiming        # the parse-only process (c)
-    parse_floor_s: list[float] = field(default_factory=list)   # (c): both parses, in it
-    lxml_parse_s: list[float] = field(default_factory=list)    # modelDescription.xml alone
-    lxml_validate_s: list[float] = field(default_factory=list)
-    xsd_valid: bool = True
 
 
 # --- command resolution -------------------------------------------------------------------

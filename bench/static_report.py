@@ -1,4 +1,4 @@
-"""The tables of the static benchmark (:mod:`bench.static_bench`): ratios and markdown.
+"""The results of the static benchmark (:mod:`bench.static_bench`), their ratios and tables.
 
 Two ratios are the ones to chase, both measured in the same run as the figures they divide:
 lsdae's wall time over the parse floor (lxml parsing both XML files in process), and lsdae's
@@ -7,10 +7,50 @@ peak memory over that of a process that only parses both files. fmpy is shown be
 from __future__ import annotations
 
 import statistics
-from typing import TYPE_CHECKING, Any
+from dataclasses import dataclass, field
+from typing import Any
 
-if TYPE_CHECKING:  # the dataclasses live with the harness, which imports this module
-    from bench.static_bench import SizeResult, ToolTiming
+
+@dataclass
+class ToolTiming:
+    """Timings of one external command on one FMU."""
+
+    command: list[str]
+    runs_s: list[float] = field(default_factory=list)
+    returncodes: list[int] = field(default_factory=list)
+    max_rss_kib: list[int] = field(default_factory=list)  # peak resident memory of each run
+    timed_out: bool = False
+    single_run: bool = False  # stopped after one run because it was slow
+    skipped: bool = False
+    output_excerpt: str = ""  # stdout+stderr of the first run with a non-zero exit
+
+    @property
+    def median_s(self) -> float | None:
+        return statistics.median(self.runs_s) if self.runs_s and not self.timed_out else None
+
+    @property
+    def median_rss_mib(self) -> float | None:
+        return statistics.median(self.max_rss_kib) / 1024 if self.max_rss_kib else None
+
+
+@dataclass
+class SizeResult:
+    requested: int
+    n_variables: int
+    n_blocks: int
+    fmu_path: str
+    fmu_bytes: int
+    model_description_bytes: int
+    manifest_bytes: int
+    generate_s: float | None
+    lsdae: ToolTiming
+    fmpy: ToolTiming
+    parse_only: ToolTiming        # the parse-only process (c)
+    parse_floor_s: list[float] = field(default_factory=list)   # (c): both parses, in it
+    lxml_parse_s: list[float] = field(default_factory=list)    # modelDescription.xml alone
+    lxml_validate_s: list[float] = field(default_factory=list)
+    xsd_valid: bool = True
+
 
 
 def fmt_tool(t: ToolTiming, timeout: float, *, skipped: str = "skipped") -> str:

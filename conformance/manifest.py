@@ -15,7 +15,7 @@ from typing import NamedTuple
 from lxml import etree
 
 from .drafts.detect import LS_NAMESPACE
-from .unknowns import Unknown, parse_unknown, parse_vr
+from .unknowns import Unknown, parse_unknown, parse_vr, path_template
 
 MANIFEST = "extra/org.fmi-standard.fmi-ls-dae/fmi-ls-manifest.xml"
 LS_ATTRIBUTES = ("fmi-ls-name", "fmi-ls-version", "fmi-ls-description")
@@ -136,21 +136,27 @@ def read_manifest(tree: etree._ElementTree, *, draft: str, file: str = MANIFEST)
 
 def _structure(ms: etree._Element, rname: str, file: str) -> list[Unknown]:
     out: list[Unknown] = []
-    counters: dict[str, int] = {}
+    where = path_template(f"/{rname}/ModelStructure")
+    counters: dict[str, list] = {}   # kind -> [the kind's shared string, elements so far]
+    shared: dict[str, tuple[str, ...]] = {}
     for el in ms:
         kind = el.tag
         if not isinstance(kind, str):
             continue
         if kind[0] == "{":
             kind = etree.QName(el).localname
-        counters[kind] = counters.get(kind, 0) + 1
-        path = f"/{rname}/ModelStructure/{kind}[{counters[kind]}]"
+        counter = counters.get(kind)
+        if counter is None:
+            counter = counters[kind] = [kind, 0]
+        counter[1] += 1
+        kind, ordinal = counter
         if kind == "Residual" and len(el):  # a legacy <Residual> with <Formulation> children
             formulations = [f for f in _elements(el) if _local(f) == "Formulation"]
             if formulations:
-                unknown = parse_unknown(formulations[0], kind, file, f"{path}/Formulation[1]")
+                unknown = parse_unknown(formulations[0], kind, file,
+                                        where + "/Formulation[1]", ordinal, shared=shared)
                 out.append(unknown._replace(formulations=len(formulations)))
                 continue
-        out.append(parse_unknown(el, kind, file, path))
+        out.append(parse_unknown(el, kind, file, where, ordinal, shared=shared))
     return out
 

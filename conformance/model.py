@@ -14,7 +14,7 @@ from typing import Iterator, Mapping, NamedTuple
 from lxml import etree
 
 from .definitions import NO_DEFINITIONS, Definitions, read_definitions
-from .unknowns import Unknown, parse_unknown, parse_vr
+from .unknowns import Unknown, parse_unknown, parse_vr, path_template
 
 MODEL_DESCRIPTION = "modelDescription.xml"
 
@@ -176,16 +176,21 @@ def default_initial(causality: str, variability: str) -> str | None:
     return None
 
 
-_DEFAULTS: dict[tuple[str, str, str | None], tuple[str, str | None]] = {}
+_Kind = tuple[str, str, str | None, str | None]   # type, causality, variability, initial
 
 
-def _effective(type_: str, causality: str, declared_var: str | None) -> tuple[str, str | None]:
-    """(variability, default initial) for a kind of variable, memoised: few distinct keys."""
-    key = (type_, causality, declared_var)
-    found = _DEFAULTS.get(key)
+def _effective(kinds: dict[_Kind, tuple[str, str, str | None, str | None, str, str | None]],
+               key: _Kind) -> tuple[str, str, str | None, str | None, str, str | None]:
+    """The attributes that classify a variable (type, causality, declared variability and
+    initial) followed by its effective variability and initial, memoised in ``kinds``: a
+    document holds few distinct classes, and its variables share these strings (lxml returns a
+    fresh string for every attribute read)."""
+    found = kinds.get(key)
     if found is None:
+        type_, causality, declared_var, declared_init = key
         variability = declared_var or default_variability(type_, causality)
-        found = _DEFAULTS[key] = (variability, default_initial(causality, variability))
+        found = kinds[key] = (*key, variability,
+                              declared_init or default_initial(causality, variability))
     return found
 
 
@@ -198,7 +203,7 @@ def _variables(container: etree._Element | None) -> list[Variable]:
     out: list[Variable] = []
     append = out.append
     new = tuple.__new__  # skips the NamedTuple's Python-level __new__
-    effective = _DEFAULTS
+    kinds: dict[_Kind, tuple[str, str, str | None, str | None, str, str | None]] = {}
     for el in (container if container is not None else ()):
         tag = el.tag
         if not isinstance(tag, str):
@@ -207,12 +212,10 @@ def _variables(container: etree._Element | None) -> list[Variable]:
         if type_ not in VARIABLE_TYPES:
             continue
         get = el.get
-        causality = get("causality", "local")
-        declared_var = get("variability")
-        found = effective.get((type_, causality, declared_var))
-        variability, initial = found if found is not None else _effective(
-            type_, causality, declared_var)
-        declared_init = get("initial")
+        key = (type_, get("causality", "local"), get("variability"), get("initial"))
+        found = kinds.get(key)
+        type_, causality, declared_var, declared_init, variability, initial = (
+            found if found is not None else _effective(kinds, key))
         start = get("start")
         dims: tuple[Dimension, ...] = ()
         aliases: tuple[str, ...] = ()
@@ -230,7 +233,7 @@ def _variables(container: etree._Element | None) -> list[Variable]:
         derivative = get("derivative")
         previous = get("previous")
         append(new(Variable, (
-            get("name", ""), vr, type_, causality, variability, declared_init or initial,
+            get("name", ""), vr, type_, causality, variability, initial,
             declared_var, declared_init, start,
             parse_vr(derivative) if derivative is not None else None,
             el.sourceline, dims, get("nominal"), get("min"), get("max"),
@@ -293,15 +296,20 @@ def read_model_description(tree: etree._ElementTree, *, file: str = MODEL_DESCRI
     structure = []
     ms = _first(root, "ModelStructure")
     if ms is not None:
-        counters: dict[str, int] = {}
+        where = path_template("/fmiModelDescription/ModelStructure")
+        counters: dict[str, list] = {}   # kind -> [the kind's shared string, elements so far]
+        shared: dict[str, tuple[str, ...]] = {}
         for el in ms:
             tag = el.tag
             if not isinstance(tag, str):
                 continue
             kind = tag if tag[0] != "{" else etree.QName(el).localname
-            counters[kind] = counters.get(kind, 0) + 1
-            path = f"/fmiModelDescription/ModelStructure/{kind}[{counters[kind]}]"
-            structure.append(parse_unknown(el, kind, file, path))
+            counter = counters.get(kind)
+            if counter is None:
+                counter = counters[kind] = [kind, 0]
+            counter[1] += 1
+            structure.append(parse_unknown(el, counter[0], file, where, counter[1],
+                                           shared=shared))
     return ModelDescription(
         file=file, fmi_version=root.get("fmiVersion"), model_name=root.get("modelName"),
         instantiation_token=root.get("instantiationToken"),

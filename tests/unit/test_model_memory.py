@@ -8,7 +8,7 @@ from lxml import etree
 
 from bench.generate import manifest_xml, model_description_xml
 from conformance.manifest import read_manifest
-from conformance.model import read_model_description
+from conformance.model import NO_DETAILS, read_model_description
 from conformance.unknowns import Unknown, path_template
 
 
@@ -86,3 +86,39 @@ def test_model_and_manifest_pickle_with_their_paths():
     assert model2.structure == model.structure
     assert [u.path for u in manifest2.structure] == [u.path for u in manifest.structure]
     assert manifest2.structure == manifest.structure
+
+
+def _variables(xml: str):
+    md = (f'<fmiModelDescription fmiVersion="3.0" modelName="M" instantiationToken="t">'
+          f'<ModelVariables>{xml}</ModelVariables></fmiModelDescription>')
+    return read_model_description(etree.ElementTree(etree.fromstring(md))).variables
+
+
+def test_details_are_shared_and_read_through_the_variable():
+    plain, typed, typed2, odd, alias = _variables(
+        '<Float64 name="a" valueReference="1" causality="output" description="d" start="1"'
+        ' derivative="3" initial="exact" variability="continuous"/>'
+        '<Float64 name="b" valueReference="2" unit="m" declaredType="L" min="0" nominal="2"/>'
+        '<Float64 name="c" valueReference="3" unit="m" declaredType="L" min="0" nominal="2"/>'
+        '<Int32 name="d" valueReference="x4" previous="2" reinit="true" clocks="5"/>'
+        '<Float64 name="e" valueReference="5"><Alias name="f" displayUnit="cm"/>'
+        '<Dimension start="2"/></Float64>')
+    assert plain.details is NO_DETAILS and plain.description == "d" and plain.start == "1"
+    assert (plain.unit, plain.dimensions, plain.reinit) == (None, (), False)
+    assert typed.details is typed2.details
+    assert (typed.unit, typed.declared_type, typed.minimum, typed.nominal) == ("m", "L", "0", "2")
+    assert (odd.vr, odd.raw_vr, odd.previous, odd.reinit, odd.clocks) == (None, "x4", 2, True, "5")
+    assert alias.aliases == ("f",) and alias.alias_display_units == (("f", "cm"),)
+    assert [d.start for d in alias.dimensions] == ["2"]
+    assert pickle.loads(pickle.dumps(alias)) == alias
+
+
+def test_an_unknown_attribute_does_not_hide_the_details():
+    (var,) = _variables('<Float64 name="a" valueReference="1" foo="1" unit="m"/>')
+    assert var.unit == "m"
+    (var,) = _variables('<Float64 name="a" valueReference="1" causality="local" max="9"/>')
+    assert var.maximum == "9"
+    (var,) = _variables('<Float64 name="a" valueReference="1" causality="local" start="1"'
+                        ' variability="continuous" initial="exact" derivative="0"'
+                        ' description="d" unit="m"/>')
+    assert var.unit == "m"

@@ -6,6 +6,7 @@ import pickle
 
 from lxml import etree
 
+import conformance.manifest as manifest_module
 from bench.generate import manifest_xml, model_description_xml
 from conformance.manifest import read_manifest
 from conformance.model import NO_DETAILS, read_model_description
@@ -122,3 +123,17 @@ def test_an_unknown_attribute_does_not_hide_the_details():
                         ' variability="continuous" initial="exact" derivative="0"'
                         ' description="d" unit="m"/>')
     assert var.unit == "m"
+
+
+def test_a_large_manifest_gives_freed_memory_back_first(monkeypatch):
+    calls: list[int] = []
+    monkeypatch.setattr(manifest_module, "release_freed_memory", lambda: calls.append(1))
+    monkeypatch.setattr(manifest_module, "RELEASE_FROM", 20)
+    _read(1)
+    assert calls == []
+    _read(4)
+    assert calls == [1]
+
+
+def test_release_freed_memory_never_raises():
+    manifest_module.release_freed_memory()

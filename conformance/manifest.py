@@ -25,15 +25,24 @@ RELEASE_FROM = 10_000   # elements in the lists of a manifest worth giving freed
 
 
 class VrRef(NamedTuple):
-    """A manifest element that points at a variable: enable parameter or algebraic variable."""
+    """A manifest element that points at a variable: enable parameter or algebraic variable.
+
+    ``path`` is built on demand from ``where`` and ``ordinal``, as for
+    :class:`~conformance.unknowns.Unknown` (a manifest may list 125k algebraic variables).
+    """
 
     vr: int | None
     line: int | None
-    path: str
+    where: str                       # the path, or a template filled with element and ordinal
     element: str                     # EnableDAEParameter, EnableDAE, @enableDAEModeVariable, ...
     raw: str | None = None           # the valueReference text when it is not an integer
     name: str | None = None          # when the variable is given by name (an old draft)
     extra: tuple[tuple[str, str], ...] = ()   # attributes beyond valueReference
+    ordinal: int = 0                 # > 0: 1-based position in its list (``where`` a template)
+
+    @property
+    def path(self) -> str:
+        return self.where.format(self.element, self.ordinal) if self.ordinal else self.where
 
 
 @dataclass(frozen=True)
@@ -84,7 +93,10 @@ def _elements(el: etree._Element | None) -> list[etree._Element]:
     return [] if el is None else [c for c in el if isinstance(c.tag, str)]
 
 
-def _ref(el: etree._Element, path: str) -> VrRef:
+def _ref(el: etree._Element, where: str, ordinal: int = 0,
+         names: dict[str, str] | None = None) -> VrRef:
+    """``where`` and ``ordinal`` as in :class:`VrRef`; ``names`` shares the element names
+    (one dict per list)."""
     raw = el.get("valueReference")
     vr = parse_vr(raw)
     attrib = el.attrib
@@ -92,8 +104,12 @@ def _ref(el: etree._Element, path: str) -> VrRef:
     if len(attrib) > (raw is not None):  # attributes beyond valueReference: rare
         extra = tuple(sorted((etree.QName(k).localname, v) for k, v in attrib.items()
                              if k != "valueReference"))
-    return VrRef(vr=vr, line=el.sourceline, path=path, element=_local(el),
-                 raw=raw if vr is None else None, extra=extra)
+    element = _local(el)
+    if names is not None:
+        element = names.setdefault(element, element)
+    # tuple.__new__ skips the NamedTuple's Python-level __new__ (125k of these at 500k variables)
+    return tuple.__new__(VrRef, (vr, el.sourceline, where, element,
+                                 raw if vr is None else None, None, extra, ordinal))
 
 
 def read_manifest(tree: etree._ElementTree, *, draft: str, file: str = MANIFEST) -> Manifest:
@@ -117,15 +133,17 @@ def read_manifest(tree: etree._ElementTree, *, draft: str, file: str = MANIFEST)
             enables.append(_ref(child, f"/{rname}/{tag}"))
         elif tag == "AlgebraicVariables":
             algebraic_line = child.sourceline
+            where = path_template(f"/{rname}/AlgebraicVariables")
+            names: dict[str, str] = {}
             for i, av in enumerate(_elements(child), 1):
-                algebraic.append(_ref(av, f"/{rname}/AlgebraicVariables/{_local(av)}[{i}]"))
+                algebraic.append(_ref(av, where, i, names))
         elif tag == "ModelStructure":
             has_ms = True
             structure.extend(_structure(child, rname, file))
     by_name = root.get("enableDAEModeVariable")
     if by_name is not None:
         enables.append(VrRef(vr=parse_vr(by_name), line=root.sourceline,
-                             path=f"/{rname}/@enableDAEModeVariable",
+                             where=f"/{rname}/@enableDAEModeVariable",
                              element="@enableDAEModeVariable",
                              name=None if by_name.strip().isdigit() else by_name))
     ns = etree.QName(root).namespace if isinstance(root.tag, str) else None

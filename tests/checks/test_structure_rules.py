@@ -441,7 +441,7 @@ def _chain(m: int, *, broken: int | None = None) -> CheckContext:
         residuals.append(Unknown(kind="Residual", vr=4 * k + 13, dependencies=tuple(deps),
                                  dependencies_kind=None, line=k + 3, file=MANIFEST,
                                  where=f"/fmiDAEManifest/ModelStructure/Residual[{k + 1}]"))
-    algebraic = tuple(VrRef(vr=4 * k + 12, line=None, path="", element="AlgebraicVariable")
+    algebraic = tuple(VrRef(vr=4 * k + 12, line=None, where="", element="AlgebraicVariable")
                       for k in range(m))
     manifest = Manifest(file=MANIFEST, root_name="fmiDAEManifest", root_namespace=None,
                         root_line=1, ls_name=None, ls_version=None, ls_description=None,

@@ -54,6 +54,10 @@ def test_paths_are_built_from_kind_and_position():
     outputs = list(model.unknowns("Output"))
     assert outputs[1].path == "/fmiModelDescription/ModelStructure/Output[2]"
     assert manifest.residuals[2].path == "/fmiDAEManifest/ModelStructure/Residual[3]"
+    assert manifest.algebraic[1].path == "/fmiDAEManifest/AlgebraicVariables/AlgebraicVariable[2]"
+    assert manifest.algebraic[0].element is manifest.algebraic[3].element
+    assert manifest.enable is not None
+    assert manifest.enable.path == "/fmiDAEManifest/EnableDAEParameter"
     derivatives = list(model.unknowns("ContinuousStateDerivative"))
     assert derivatives[0].path == "/fmiModelDescription/ModelStructure/ContinuousStateDerivative[1]"
 
@@ -87,6 +91,8 @@ def test_model_and_manifest_pickle_with_their_paths():
     assert model2.structure == model.structure
     assert [u.path for u in manifest2.structure] == [u.path for u in manifest.structure]
     assert manifest2.structure == manifest.structure
+    assert manifest2 == manifest
+    assert [r.path for r in manifest2.algebraic] == [r.path for r in manifest.algebraic]
 
 
 def _variables(xml: str):

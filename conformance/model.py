@@ -228,6 +228,9 @@ def _effective(kinds: dict[_Kind, tuple[str, str, str | None, str | None, str, s
     return found
 
 
+_SHARED_LIMIT = 4096   # distinct start values (and VariableDetails) shared per document
+
+
 def _variables(container: etree._Element | None) -> list[Variable]:
     """The variables of ``<ModelVariables>``, in document order.
 
@@ -239,6 +242,7 @@ def _variables(container: etree._Element | None) -> list[Variable]:
     new = tuple.__new__  # skips the NamedTuple's Python-level __new__
     kinds: dict[_Kind, tuple[str, str, str | None, str | None, str, str | None]] = {}
     shared: dict[VariableDetails, VariableDetails] = {}
+    starts: dict[str, str] = {}   # "0", "1", "false"...: a start value is one string per document
     for el in (container if container is not None else ()):
         tag = el.tag
         if not isinstance(tag, str):
@@ -254,6 +258,11 @@ def _variables(container: etree._Element | None) -> list[Variable]:
         basics = (get("name"), get("valueReference"), get("start"), get("derivative"),
                   get("description"))
         name, raw_vr, start, derivative, description = basics
+        if start is not None:
+            if (known := starts.get(start)) is not None:
+                start = known
+            elif len(starts) < _SHARED_LIMIT:
+                starts[start] = start
         if raw_vr is not None and len(raw_vr) < 10 and raw_vr.isdigit() and raw_vr.isascii():
             vr: int | None = int(raw_vr)
             raw_vr = None
@@ -275,7 +284,6 @@ def _variables(container: etree._Element | None) -> list[Variable]:
     return out
 
 
-_SHARED_DETAILS_LIMIT = 4096   # distinct VariableDetails shared per document
 
 
 def _details(el: etree._Element, start: str | None, raw_vr: str | None,
@@ -297,7 +305,7 @@ def _details(el: etree._Element, start: str | None, raw_vr: str | None,
     found = shared.get(details)
     if found is None:
         found = details if details != NO_DETAILS else NO_DETAILS
-        if len(shared) < _SHARED_DETAILS_LIMIT:
+        if len(shared) < _SHARED_LIMIT:
             shared[details] = found
     return start, found
 

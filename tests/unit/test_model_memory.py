@@ -143,3 +143,10 @@ def test_a_large_manifest_gives_freed_memory_back_first(monkeypatch):
 
 def test_release_freed_memory_never_raises():
     manifest_module.release_freed_memory()
+
+
+def test_equal_start_values_are_one_string():
+    a, b, c = _variables('<Float64 name="a" valueReference="1" start="0.5"/>'
+                         '<Float64 name="b" valueReference="2" start="0.5"/>'
+                         '<Float64 name="c" valueReference="3" start="0.25"/>')
+    assert a.start is b.start and (a.start, c.start) == ("0.5", "0.25")

@@ -8,6 +8,7 @@ The shape itself is reported by the draft rules; the semantic rules then run on 
 """
 from __future__ import annotations
 
+import sys
 from dataclasses import dataclass
 from functools import cached_property
 from typing import NamedTuple
@@ -15,23 +16,33 @@ from typing import NamedTuple
 from lxml import etree
 
 from .drafts.detect import LS_NAMESPACE
-from .unknowns import Unknown, parse_unknown, parse_vr
+from .unknowns import Unknown, parse_unknown, parse_vr, path_template
 
 MANIFEST = "extra/org.fmi-standard.fmi-ls-dae/fmi-ls-manifest.xml"
 LS_ATTRIBUTES = ("fmi-ls-name", "fmi-ls-version", "fmi-ls-description")
 ENABLE_ELEMENTS = ("EnableDAEParameter", "EnableDAE")
+RELEASE_FROM = 10_000   # elements in the lists of a manifest worth giving freed memory back for
 
 
 class VrRef(NamedTuple):
-    """A manifest element that points at a variable: enable parameter or algebraic variable."""
+    """A manifest element that points at a variable: enable parameter or algebraic variable.
+
+    ``path`` is built on demand from ``where`` and ``ordinal``, as for
+    :class:`~conformance.unknowns.Unknown` (a manifest may list 125k algebraic variables).
+    """
 
     vr: int | None
     line: int | None
-    path: str
+    where: str                       # the path, or a template filled with element and ordinal
     element: str                     # EnableDAEParameter, EnableDAE, @enableDAEModeVariable, ...
     raw: str | None = None           # the valueReference text when it is not an integer
     name: str | None = None          # when the variable is given by name (an old draft)
     extra: tuple[tuple[str, str], ...] = ()   # attributes beyond valueReference
+    ordinal: int = 0                 # > 0: 1-based position in its list (``where`` a template)
+
+    @property
+    def path(self) -> str:
+        return self.where.format(self.element, self.ordinal) if self.ordinal else self.where
 
 
 @dataclass(frozen=True)
@@ -82,7 +93,10 @@ def _elements(el: etree._Element | None) -> list[etree._Element]:
     return [] if el is None else [c for c in el if isinstance(c.tag, str)]
 
 
-def _ref(el: etree._Element, path: str) -> VrRef:
+def _ref(el: etree._Element, where: str, ordinal: int = 0,
+         names: dict[str, str] | None = None) -> VrRef:
+    """``where`` and ``ordinal`` as in :class:`VrRef`; ``names`` shares the element names
+    (one dict per list)."""
     raw = el.get("valueReference")
     vr = parse_vr(raw)
     attrib = el.attrib
@@ -90,8 +104,12 @@ def _ref(el: etree._Element, path: str) -> VrRef:
     if len(attrib) > (raw is not None):  # attributes beyond valueReference: rare
         extra = tuple(sorted((etree.QName(k).localname, v) for k, v in attrib.items()
                              if k != "valueReference"))
-    return VrRef(vr=vr, line=el.sourceline, path=path, element=_local(el),
-                 raw=raw if vr is None else None, extra=extra)
+    element = _local(el)
+    if names is not None:
+        element = names.setdefault(element, element)
+    # tuple.__new__ skips the NamedTuple's Python-level __new__ (125k of these at 500k variables)
+    return tuple.__new__(VrRef, (vr, el.sourceline, where, element,
+                                 raw if vr is None else None, None, extra, ordinal))
 
 
 def read_manifest(tree: etree._ElementTree, *, draft: str, file: str = MANIFEST) -> Manifest:
@@ -106,21 +124,26 @@ def read_manifest(tree: etree._ElementTree, *, draft: str, file: str = MANIFEST)
     algebraic_line = None
     structure: list[Unknown] = []
     has_ms = False
-    for child in _elements(root):
+    children = _elements(root)
+    if sum(map(len, children)) >= RELEASE_FROM:
+        release_freed_memory()
+    for child in children:
         tag = _local(child)
         if tag in ENABLE_ELEMENTS:
             enables.append(_ref(child, f"/{rname}/{tag}"))
         elif tag == "AlgebraicVariables":
             algebraic_line = child.sourceline
+            where = path_template(f"/{rname}/AlgebraicVariables")
+            names: dict[str, str] = {}
             for i, av in enumerate(_elements(child), 1):
-                algebraic.append(_ref(av, f"/{rname}/AlgebraicVariables/{_local(av)}[{i}]"))
+                algebraic.append(_ref(av, where, i, names))
         elif tag == "ModelStructure":
             has_ms = True
             structure.extend(_structure(child, rname, file))
     by_name = root.get("enableDAEModeVariable")
     if by_name is not None:
         enables.append(VrRef(vr=parse_vr(by_name), line=root.sourceline,
-                             path=f"/{rname}/@enableDAEModeVariable",
+                             where=f"/{rname}/@enableDAEModeVariable",
                              element="@enableDAEModeVariable",
                              name=None if by_name.strip().isdigit() else by_name))
     ns = etree.QName(root).namespace if isinstance(root.tag, str) else None
@@ -134,23 +157,46 @@ def read_manifest(tree: etree._ElementTree, *, draft: str, file: str = MANIFEST)
     )
 
 
+def release_freed_memory() -> None:
+    """Give the pages of the C heap that are free back to the system (glibc's malloc_trim).
+
+    Called before a large manifest's objects are built: by then the modelDescription tree (934
+    MiB at 500k variables) has been freed, but glibc keeps its pages, and Python builds its
+    objects in memory of its own, not in those pages, so the peak would be the tree plus every
+    object. A no-op where there is no glibc.
+    """
+    if not sys.platform.startswith("linux"):
+        return
+    try:
+        import ctypes  # lazy: only large documents pay for the import (2 ms)
+        ctypes.CDLL(None).malloc_trim(0)
+    except (OSError, AttributeError):  # not glibc (musl has no malloc_trim)
+        pass
+
+
 def _structure(ms: etree._Element, rname: str, file: str) -> list[Unknown]:
     out: list[Unknown] = []
-    counters: dict[str, int] = {}
+    where = path_template(f"/{rname}/ModelStructure")
+    counters: dict[str, list] = {}   # kind -> [the kind's shared string, elements so far]
+    shared: dict[str, tuple[str, ...]] = {}
     for el in ms:
         kind = el.tag
         if not isinstance(kind, str):
             continue
         if kind[0] == "{":
             kind = etree.QName(el).localname
-        counters[kind] = counters.get(kind, 0) + 1
-        path = f"/{rname}/ModelStructure/{kind}[{counters[kind]}]"
+        counter = counters.get(kind)
+        if counter is None:
+            counter = counters[kind] = [kind, 0]
+        counter[1] += 1
+        kind, ordinal = counter
         if kind == "Residual" and len(el):  # a legacy <Residual> with <Formulation> children
             formulations = [f for f in _elements(el) if _local(f) == "Formulation"]
             if formulations:
-                unknown = parse_unknown(formulations[0], kind, file, f"{path}/Formulation[1]")
+                unknown = parse_unknown(formulations[0], kind, file,
+                                        where + "/Formulation[1]", ordinal, shared=shared)
                 out.append(unknown._replace(formulations=len(formulations)))
                 continue
-        out.append(parse_unknown(el, kind, file, path))
+        out.append(parse_unknown(el, kind, file, where, ordinal, shared=shared))
     return out
 

@@ -9,12 +9,13 @@ ModelStructure elements are :class:`~conformance.unknowns.Unknown`, as in the ma
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from operator import attrgetter
 from typing import Iterator, Mapping, NamedTuple
 
 from lxml import etree
 
 from .definitions import NO_DEFINITIONS, Definitions, read_definitions
-from .unknowns import Unknown, parse_unknown, parse_vr
+from .unknowns import Unknown, parse_unknown, parse_vr, path_template
 
 MODEL_DESCRIPTION = "modelDescription.xml"
 
@@ -34,11 +35,38 @@ class Dimension(NamedTuple):
     raw_vr: str | None = None     # the attribute text, when it did not parse as a valueReference
 
 
+class VariableDetails(NamedTuple):
+    """The attributes and children of a variable that most variables do not have.
+
+    Kept apart so that a variable without any holds one shared :data:`NO_DETAILS`, and
+    variables with the same ones (unit, declaredType, min, max...) share one tuple: a field of
+    :class:`Variable` costs 8 bytes per variable, 4 MB at 500k variables (issue 11).
+    """
+
+    dimensions: tuple[Dimension, ...] = ()
+    nominal: str | None = None
+    minimum: str | None = None
+    maximum: str | None = None
+    reinit: bool = False
+    clocks: str | None = None
+    previous: int | None = None
+    raw_vr: str | None = None     # the attribute text, when it did not parse as an integer
+    aliases: tuple[str, ...] = ()  # names of <Alias> children
+    declared_type: str | None = None
+    unit: str | None = None
+    display_unit: str | None = None
+    alias_display_units: tuple[tuple[str, str], ...] = ()  # (alias name, displayUnit) where given
+
+
+NO_DETAILS = VariableDetails()
+
+
 class Variable(NamedTuple):
     """One variable of ``<ModelVariables>`` with FMI defaults applied.
 
     Immutable like the rest of the model; a NamedTuple rather than a frozen dataclass because a
     modelDescription may hold 100,000 of them and construction cost matters (see reports/bench).
+    The fields of :class:`VariableDetails` read as attributes of the variable too.
     """
 
     name: str
@@ -52,20 +80,22 @@ class Variable(NamedTuple):
     start: str | None            # attribute, or <Start value> children joined by spaces
     derivative: int | None
     line: int | None
-    dimensions: tuple[Dimension, ...] = ()
-    nominal: str | None = None
-    minimum: str | None = None
-    maximum: str | None = None
     description: str | None = None
-    reinit: bool = False
-    clocks: str | None = None
-    previous: int | None = None
-    raw_vr: str | None = None     # the attribute text, when it did not parse as an integer
-    aliases: tuple[str, ...] = ()  # names of <Alias> children
-    declared_type: str | None = None
-    unit: str | None = None
-    display_unit: str | None = None
-    alias_display_units: tuple[tuple[str, str], ...] = ()  # (alias name, displayUnit) where given
+    details: VariableDetails = NO_DETAILS
+
+    dimensions = property(attrgetter("details.dimensions"))
+    nominal = property(attrgetter("details.nominal"))
+    minimum = property(attrgetter("details.minimum"))
+    maximum = property(attrgetter("details.maximum"))
+    reinit = property(attrgetter("details.reinit"))
+    clocks = property(attrgetter("details.clocks"))
+    previous = property(attrgetter("details.previous"))
+    raw_vr = property(attrgetter("details.raw_vr"))
+    aliases = property(attrgetter("details.aliases"))
+    declared_type = property(attrgetter("details.declared_type"))
+    unit = property(attrgetter("details.unit"))
+    display_unit = property(attrgetter("details.display_unit"))
+    alias_display_units = property(attrgetter("details.alias_display_units"))
 
     @property
     def is_float(self) -> bool:
@@ -176,17 +206,29 @@ def default_initial(causality: str, variability: str) -> str | None:
     return None
 
 
-_DEFAULTS: dict[tuple[str, str, str | None], tuple[str, str | None]] = {}
+# type, causality, variability, initial as written (None: attribute absent)
+_Kind = tuple[str, str | None, str | None, str | None]
 
 
-def _effective(type_: str, causality: str, declared_var: str | None) -> tuple[str, str | None]:
-    """(variability, default initial) for a kind of variable, memoised: few distinct keys."""
-    key = (type_, causality, declared_var)
-    found = _DEFAULTS.get(key)
+def _effective(kinds: dict[_Kind, tuple[str, str, str | None, str | None, str, str | None]],
+               key: _Kind) -> tuple[str, str, str | None, str | None, str, str | None]:
+    """The attributes that classify a variable (type, causality with its default, declared
+    variability and initial) followed by its effective variability and initial, memoised in
+    ``kinds``: a
+    document holds few distinct classes, and its variables share these strings (lxml returns a
+    fresh string for every attribute read)."""
+    found = kinds.get(key)
     if found is None:
+        type_, causality, declared_var, declared_init = key
+        if causality is None:
+            causality = "local"
         variability = declared_var or default_variability(type_, causality)
-        found = _DEFAULTS[key] = (variability, default_initial(causality, variability))
+        found = kinds[key] = (type_, causality, declared_var, declared_init, variability,
+                              declared_init or default_initial(causality, variability))
     return found
+
+
+_SHARED_LIMIT = 4096   # distinct start values (and VariableDetails) shared per document
 
 
 def _variables(container: etree._Element | None) -> list[Variable]:
@@ -198,7 +240,9 @@ def _variables(container: etree._Element | None) -> list[Variable]:
     out: list[Variable] = []
     append = out.append
     new = tuple.__new__  # skips the NamedTuple's Python-level __new__
-    effective = _DEFAULTS
+    kinds: dict[_Kind, tuple[str, str, str | None, str | None, str, str | None]] = {}
+    shared: dict[VariableDetails, VariableDetails] = {}
+    starts: dict[str, str] = {}   # "0", "1", "false"...: a start value is one string per document
     for el in (container if container is not None else ()):
         tag = el.tag
         if not isinstance(tag, str):
@@ -207,19 +251,18 @@ def _variables(container: etree._Element | None) -> list[Variable]:
         if type_ not in VARIABLE_TYPES:
             continue
         get = el.get
-        causality = get("causality", "local")
-        declared_var = get("variability")
-        found = effective.get((type_, causality, declared_var))
-        variability, initial = found if found is not None else _effective(
-            type_, causality, declared_var)
-        declared_init = get("initial")
-        start = get("start")
-        dims: tuple[Dimension, ...] = ()
-        aliases: tuple[str, ...] = ()
-        alias_units: tuple[tuple[str, str], ...] = ()
-        if len(el):  # most variables have no children: no lists to build for them
-            start, dims, aliases, alias_units = _children_of_variable(el, start)
-        raw_vr = get("valueReference")
+        key = (type_, get("causality"), get("variability"), get("initial"))
+        found = kinds.get(key)
+        type_, causality, declared_var, declared_init, variability, initial = (
+            found if found is not None else _effective(kinds, key))
+        basics = (get("name"), get("valueReference"), get("start"), get("derivative"),
+                  get("description"))
+        name, raw_vr, start, derivative, description = basics
+        if start is not None:
+            if (known := starts.get(start)) is not None:
+                start = known
+            elif len(starts) < _SHARED_LIMIT:
+                starts[start] = start
         if raw_vr is not None and len(raw_vr) < 10 and raw_vr.isdigit() and raw_vr.isascii():
             vr: int | None = int(raw_vr)
             raw_vr = None
@@ -227,18 +270,44 @@ def _variables(container: etree._Element | None) -> list[Variable]:
             vr = parse_vr(raw_vr)
             if vr is not None:
                 raw_vr = None
-        derivative = get("derivative")
-        previous = get("previous")
+        details = NO_DETAILS
+        # attributes beyond the ones read above, or children: read the details (most have none)
+        if len(el) or raw_vr is not None or (
+                len(el.attrib) > 8 - key.count(None) - basics.count(None)):
+            start, details = _details(el, start, raw_vr, shared)
         append(new(Variable, (
-            get("name", ""), vr, type_, causality, variability, declared_init or initial,
+            "" if name is None else name, vr, type_, causality, variability, initial,
             declared_var, declared_init, start,
             parse_vr(derivative) if derivative is not None else None,
-            el.sourceline, dims, get("nominal"), get("min"), get("max"),
-            get("description"), get("reinit", "false") in ("true", "1"), get("clocks"),
-            parse_vr(previous) if previous is not None else None,
-            raw_vr, aliases, get("declaredType"), get("unit"), get("displayUnit"), alias_units,
+            el.sourceline, description, details,
         )))
     return out
+
+
+
+
+def _details(el: etree._Element, start: str | None, raw_vr: str | None,
+             shared: dict[VariableDetails, VariableDetails]
+             ) -> tuple[str | None, VariableDetails]:
+    """The start value (it may come from <Start> children) and the details of a variable;
+    equal details are one tuple, shared through ``shared`` (one dict per document)."""
+    get = el.get
+    dims: tuple[Dimension, ...] = ()
+    aliases: tuple[str, ...] = ()
+    alias_units: tuple[tuple[str, str], ...] = ()
+    if len(el):
+        start, dims, aliases, alias_units = _children_of_variable(el, start)
+    previous = get("previous")
+    details = VariableDetails(
+        dims, get("nominal"), get("min"), get("max"), get("reinit", "false") in ("true", "1"),
+        get("clocks"), parse_vr(previous) if previous is not None else None, raw_vr, aliases,
+        get("declaredType"), get("unit"), get("displayUnit"), alias_units)
+    found = shared.get(details)
+    if found is None:
+        found = details if details != NO_DETAILS else NO_DETAILS
+        if len(shared) < _SHARED_LIMIT:
+            shared[details] = found
+    return start, found
 
 
 def _children_of_variable(el: etree._Element, start: str | None) -> tuple[
@@ -293,15 +362,20 @@ def read_model_description(tree: etree._ElementTree, *, file: str = MODEL_DESCRI
     structure = []
     ms = _first(root, "ModelStructure")
     if ms is not None:
-        counters: dict[str, int] = {}
+        where = path_template("/fmiModelDescription/ModelStructure")
+        counters: dict[str, list] = {}   # kind -> [the kind's shared string, elements so far]
+        shared: dict[str, tuple[str, ...]] = {}
         for el in ms:
             tag = el.tag
             if not isinstance(tag, str):
                 continue
             kind = tag if tag[0] != "{" else etree.QName(el).localname
-            counters[kind] = counters.get(kind, 0) + 1
-            path = f"/fmiModelDescription/ModelStructure/{kind}[{counters[kind]}]"
-            structure.append(parse_unknown(el, kind, file, path))
+            counter = counters.get(kind)
+            if counter is None:
+                counter = counters[kind] = [kind, 0]
+            counter[1] += 1
+            structure.append(parse_unknown(el, counter[0], file, where, counter[1],
+                                           shared=shared))
     return ModelDescription(
         file=file, fmi_version=root.get("fmiVersion"), model_name=root.get("modelName"),
         instantiation_token=root.get("instantiationToken"),

@@ -13,7 +13,13 @@ from lxml import etree
 
 
 class Unknown(NamedTuple):
-    """An element of a ModelStructure (core or manifest): Output, Residual, ..."""
+    """An element of a ModelStructure (core or manifest): Output, Residual, ...
+
+    ``path`` is built on demand: a manifest of 500k variables holds about a million of these, and
+    a path string each would cost ~100 bytes apiece. The readers store one ``where`` template
+    shared by all elements (``".../ModelStructure/{}[{}]"``, filled with ``kind`` and
+    ``ordinal``); an Unknown built by hand may give the path itself as ``where`` (ordinal 0).
+    """
 
     kind: str
     vr: int | None
@@ -21,10 +27,16 @@ class Unknown(NamedTuple):
     dependencies_kind: tuple[str, ...] | None
     line: int | None
     file: str
-    path: str
+    where: str                                # the path, or a template (see ``ordinal``)
     bad_tokens: tuple[str, ...] = ()          # dependency tokens that are not integers
     index: str | None = None                  # legacy `index` attribute
     formulations: int = 0                     # legacy: number of <Formulation> children
+    ordinal: int = 0                          # > 0: 1-based position among same-kind siblings
+
+    @property
+    def path(self) -> str:
+        """The element's XPath, e.g. ``/fmiDAEManifest/ModelStructure/Residual[3]``."""
+        return self.where.format(self.kind, self.ordinal) if self.ordinal else self.where
 
 
 UINT32_MAX = 0xFFFF_FFFF               # fmi3ValueReference
@@ -50,9 +62,23 @@ def parse_vr(text: str | None) -> int | None:
     return parse_uint(text, limit=UINT32_MAX)
 
 
-def parse_unknown(el: etree._Element, kind: str, file: str, path: str,
-                  attrs: Mapping[str, str] | None = None) -> Unknown:
-    """Read valueReference / dependencies / dependenciesKind of a structure element."""
+def path_template(prefix: str) -> str:
+    """The ``where`` template of the elements under the XPath ``prefix``:
+    ``path_template(prefix).format(kind, ordinal) == f"{prefix}/{kind}[{ordinal}]"``."""
+    return prefix.replace("{", "{{").replace("}", "}}") + "/{}[{}]"
+
+
+_SHARED_KINDS_LIMIT = 1024   # distinct dependenciesKind texts shared per document
+
+
+def parse_unknown(el: etree._Element, kind: str, file: str, where: str, ordinal: int = 0,
+                  attrs: Mapping[str, str] | None = None,
+                  shared: dict[str, tuple[str, ...]] | None = None) -> Unknown:
+    """Read valueReference / dependencies / dependenciesKind of a structure element.
+
+    ``where`` and ``ordinal`` as in :class:`Unknown`. ``shared``, one dict per document, makes
+    equal dependenciesKind lists one tuple of shared strings (a chain's 500k elements hold a few
+    distinct lists)."""
     get = el.get if attrs is None else attrs.get
     deps_text = get("dependencies")
     deps: tuple[int, ...] | None = None
@@ -66,14 +92,22 @@ def parse_unknown(el: etree._Element, kind: str, file: str, path: str,
         else:
             deps, bad = _slow_dependencies(tokens)
     kinds_text = get("dependenciesKind")
+    kinds: tuple[str, ...] | None = None
+    if kinds_text is not None:
+        if shared is None:
+            kinds = tuple(kinds_text.split())
+        elif (kinds := shared.get(kinds_text)) is None:
+            # a token t is also the text of the one-token list (t,): its entry shares t
+            kinds = tuple([shared.setdefault(t, (t,))[0] for t in kinds_text.split()])
+            if len(shared) < _SHARED_KINDS_LIMIT:
+                shared[kinds_text] = kinds
     raw_vr = get("valueReference")
     vr = int(raw_vr) if (raw_vr is not None and len(raw_vr) < 10 and raw_vr.isdigit()
                          and raw_vr.isascii()) else parse_vr(raw_vr)
     # tuple.__new__ skips the NamedTuple's Python-level __new__: a manifest of 500k variables
     # builds about a million of these (see reports/bench/static.md).
     return tuple.__new__(Unknown, (
-        kind, vr, deps, tuple(kinds_text.split()) if kinds_text is not None else None,
-        el.sourceline, file, path, bad, get("index"), 0))
+        kind, vr, deps, kinds, el.sourceline, file, where, bad, get("index"), 0, ordinal))
 
 
 def _slow_dependencies(tokens: list[str]) -> tuple[tuple[int, ...], tuple[str, ...]]:

@@ -440,8 +440,8 @@ def _chain(m: int, *, broken: int | None = None) -> CheckContext:
         deps = [4 * k + 10] + ([4 * k + 8] if k else []) + ([] if k == broken else [4 * k + 12])
         residuals.append(Unknown(kind="Residual", vr=4 * k + 13, dependencies=tuple(deps),
                                  dependencies_kind=None, line=k + 3, file=MANIFEST,
-                                 path=f"/fmiDAEManifest/ModelStructure/Residual[{k + 1}]"))
-    algebraic = tuple(VrRef(vr=4 * k + 12, line=None, path="", element="AlgebraicVariable")
+                                 where=f"/fmiDAEManifest/ModelStructure/Residual[{k + 1}]"))
+    algebraic = tuple(VrRef(vr=4 * k + 12, line=None, where="", element="AlgebraicVariable")
                       for k in range(m))
     manifest = Manifest(file=MANIFEST, root_name="fmiDAEManifest", root_namespace=None,
                         root_line=1, ls_name=None, ls_version=None, ls_description=None,

@@ -27,6 +27,7 @@ from .drafts.migrate import legacy_violations
 from .engine_options import EngineOptions, RuleSelection
 from .findings import FmuReport, Location, Report, Violation, evidence
 from .fmu import ArchiveLimits, ArchiveReadError, open_fmu
+from .heap import RELEASE_FROM, release_freed_memory
 from .layer import manifest_missing, skip_reason
 from .manifest import MANIFEST, Manifest, read_manifest
 from .model import MODEL_DESCRIPTION, ModelDescription, read_model_description
@@ -125,6 +126,8 @@ def _run(path: Path, limits: ArchiveLimits, options: EngineOptions, catalogue: C
         names = tuple(source.names())
         state.has_manifest = MANIFEST in names
         model = _read_model(source, names, options, collector, texts, state)
+        if model is not None and len(model.variables) >= RELEASE_FROM:
+            release_freed_memory()  # the model's tree is gone: its pages before the manifest's
         if state.not_checked:
             state.info["not_checked"] = state.not_checked
             state.skipped.update((r.code, state.not_checked) for r in catalogue

@@ -8,7 +8,6 @@ The shape itself is reported by the draft rules; the semantic rules then run on 
 """
 from __future__ import annotations
 
-import sys
 from dataclasses import dataclass
 from functools import cached_property
 from typing import NamedTuple
@@ -21,7 +20,6 @@ from .unknowns import Unknown, parse_unknown, parse_vr, path_template
 MANIFEST = "extra/org.fmi-standard.fmi-ls-dae/fmi-ls-manifest.xml"
 LS_ATTRIBUTES = ("fmi-ls-name", "fmi-ls-version", "fmi-ls-description")
 ENABLE_ELEMENTS = ("EnableDAEParameter", "EnableDAE")
-RELEASE_FROM = 10_000   # elements in the lists of a manifest worth giving freed memory back for
 
 
 class VrRef(NamedTuple):
@@ -124,10 +122,7 @@ def read_manifest(tree: etree._ElementTree, *, draft: str, file: str = MANIFEST)
     algebraic_line = None
     structure: list[Unknown] = []
     has_ms = False
-    children = _elements(root)
-    if sum(map(len, children)) >= RELEASE_FROM:
-        release_freed_memory()
-    for child in children:
+    for child in _elements(root):
         tag = _local(child)
         if tag in ENABLE_ELEMENTS:
             enables.append(_ref(child, f"/{rname}/{tag}"))
@@ -155,23 +150,6 @@ def read_manifest(tree: etree._ElementTree, *, draft: str, file: str = MANIFEST)
         structure=tuple(structure), has_model_structure=has_ms,
         is_dae_fmu=root.get("isDaeFmu"), draft=draft,
     )
-
-
-def release_freed_memory() -> None:
-    """Give the pages of the C heap that are free back to the system (glibc's malloc_trim).
-
-    Called before a large manifest's objects are built: by then the modelDescription tree (934
-    MiB at 500k variables) has been freed, but glibc keeps its pages, and Python builds its
-    objects in memory of its own, not in those pages, so the peak would be the tree plus every
-    object. A no-op where there is no glibc.
-    """
-    if not sys.platform.startswith("linux"):
-        return
-    try:
-        import ctypes  # lazy: only large documents pay for the import (2 ms)
-        ctypes.CDLL(None).malloc_trim(0)
-    except (OSError, AttributeError):  # not glibc (musl has no malloc_trim)
-        pass
 
 
 def _structure(ms: etree._Element, rname: str, file: str) -> list[Unknown]:

@@ -31,7 +31,7 @@ FLOORS: list[tuple[str, ...]] = [
      "manifest", "layer", "reporters", "ruledocs", "baseline", "result_cache", "source_texts"),
     ("drafts", "catalogue", "config"),
     ("numerics", "model", "unknowns", "bipartite", "matching", "dulmage_mendelsohn", "findings",
-     "paths", "progress", "process_pool", "background", "attributes", "definitions", "structured_names",
+     "paths", "progress", "process_pool", "background", "heap", "attributes", "definitions", "structured_names",
      "__init__", "sharding", "report_reader"),
 ]
 

@@ -6,8 +6,8 @@ import pickle
 
 from lxml import etree
 
-import conformance.manifest as manifest_module
 from bench.generate import manifest_xml, model_description_xml
+from conformance import heap
 from conformance.manifest import read_manifest
 from conformance.model import NO_DETAILS, read_model_description
 from conformance.unknowns import Unknown, path_template
@@ -131,18 +131,22 @@ def test_an_unknown_attribute_does_not_hide_the_details():
     assert var.unit == "m"
 
 
-def test_a_large_manifest_gives_freed_memory_back_first(monkeypatch):
+def test_a_large_model_gives_its_freed_tree_back_before_the_manifest(monkeypatch):
+    from conformance import engine
+    from scenes.build import build_scene
+
     calls: list[int] = []
-    monkeypatch.setattr(manifest_module, "release_freed_memory", lambda: calls.append(1))
-    monkeypatch.setattr(manifest_module, "RELEASE_FROM", 20)
-    _read(1)
+    monkeypatch.setattr(engine, "release_freed_memory", lambda: calls.append(1))
+    fmu = build_scene("HelloWorldDAE")
+    engine.check_fmu(fmu, options=engine.EngineOptions(probes=False))
     assert calls == []
-    _read(4)
+    monkeypatch.setattr(engine, "RELEASE_FROM", 1)
+    engine.check_fmu(fmu, options=engine.EngineOptions(probes=False))
     assert calls == [1]
 
 
 def test_release_freed_memory_never_raises():
-    manifest_module.release_freed_memory()
+    heap.release_freed_memory()
 
 
 def test_equal_start_values_are_one_string():

@@ -1,4 +1,4 @@
-"""The parsed modelDescription.xml as frozen dataclasses, with source lines.
+"""Reading modelDescription.xml into its parts (:mod:`conformance.model_parts`), with source lines.
 
 Parsing is lenient: whatever the XSD says about a document, we build as much of the model as we
 can, so the semantic rules still run and report. Values that are missing or malformed become
@@ -8,203 +8,15 @@ ModelStructure elements are :class:`~conformance.unknowns.Unknown`, as in the ma
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-from operator import attrgetter
-from typing import Iterator, Mapping, NamedTuple
-
 from lxml import etree
 
-from .definitions import NO_DEFINITIONS, Definitions, read_definitions
-from .unknowns import Unknown, parse_unknown, parse_vr, path_template
-
-MODEL_DESCRIPTION = "modelDescription.xml"
-
-FLOAT_TYPES = frozenset({"Float32", "Float64"})
-VARIABLE_TYPES = frozenset({
-    "Float32", "Float64", "Int8", "UInt8", "Int16", "UInt16", "Int32", "UInt32", "Int64",
-    "UInt64", "Boolean", "String", "Binary", "Enumeration", "Clock",
-})
-STRUCTURE_KINDS = ("Output", "ContinuousStateDerivative", "ClockedState", "InitialUnknown",
-                   "EventIndicator")
-
-
-class Dimension(NamedTuple):
-    start: str | None
-    vr: int | None
-    line: int | None
-    raw_vr: str | None = None     # the attribute text, when it did not parse as a valueReference
-
-
-class VariableDetails(NamedTuple):
-    """The attributes and children of a variable that most variables do not have.
-
-    Kept apart so that a variable without any holds one shared :data:`NO_DETAILS`, and
-    variables with the same ones (unit, declaredType, min, max...) share one tuple: a field of
-    :class:`Variable` costs 8 bytes per variable, 4 MB at 500k variables (issue 11).
-    """
-
-    dimensions: tuple[Dimension, ...] = ()
-    nominal: str | None = None
-    minimum: str | None = None
-    maximum: str | None = None
-    reinit: bool = False
-    clocks: str | None = None
-    previous: int | None = None
-    raw_vr: str | None = None     # the attribute text, when it did not parse as an integer
-    aliases: tuple[str, ...] = ()  # names of <Alias> children
-    declared_type: str | None = None
-    unit: str | None = None
-    display_unit: str | None = None
-    alias_display_units: tuple[tuple[str, str], ...] = ()  # (alias name, displayUnit) where given
-
-
-NO_DETAILS = VariableDetails()
-
-
-class Variable(NamedTuple):
-    """One variable of ``<ModelVariables>`` with FMI defaults applied.
-
-    Immutable like the rest of the model; a NamedTuple rather than a frozen dataclass because a
-    modelDescription may hold 100,000 of them and construction cost matters (see reports/bench).
-    The fields of :class:`VariableDetails` read as attributes of the variable too.
-    """
-
-    name: str
-    vr: int | None
-    type: str
-    causality: str
-    variability: str
-    initial: str | None          # effective (default applied); None where not allowed
-    declared_variability: str | None
-    declared_initial: str | None
-    start: str | None            # attribute, or <Start value> children joined by spaces
-    derivative: int | None
-    line: int | None
-    description: str | None = None
-    details: VariableDetails = NO_DETAILS
-
-    dimensions = property(attrgetter("details.dimensions"))
-    nominal = property(attrgetter("details.nominal"))
-    minimum = property(attrgetter("details.minimum"))
-    maximum = property(attrgetter("details.maximum"))
-    reinit = property(attrgetter("details.reinit"))
-    clocks = property(attrgetter("details.clocks"))
-    previous = property(attrgetter("details.previous"))
-    raw_vr = property(attrgetter("details.raw_vr"))
-    aliases = property(attrgetter("details.aliases"))
-    declared_type = property(attrgetter("details.declared_type"))
-    unit = property(attrgetter("details.unit"))
-    display_unit = property(attrgetter("details.display_unit"))
-    alias_display_units = property(attrgetter("details.alias_display_units"))
-
-    @property
-    def is_float(self) -> bool:
-        return self.type in FLOAT_TYPES
-
-    @property
-    def path(self) -> str:
-        return f"/fmiModelDescription/ModelVariables/{self.type}[@name='{self.name}']"
-
-    @property
-    def label(self) -> str:
-        return f"'{self.name}' (valueReference {self.vr})" if self.vr is not None else f"'{self.name}'"
-
-
-@dataclass(frozen=True, slots=True)
-class ModelExchange:
-    model_identifier: str | None
-    attributes: tuple[tuple[str, str], ...]
-    line: int | None
-
-    def flag(self, name: str) -> bool:
-        return dict(self.attributes).get(name, "false").strip() in ("true", "1")
-
-
-class DefaultExperiment(NamedTuple):
-    """``<DefaultExperiment>``: the exporter's suggested run (None where absent or malformed)."""
-
-    start_time: float | None = None
-    stop_time: float | None = None
-    tolerance: float | None = None
-    step_size: float | None = None
-
-
-def _float(text: str | None) -> float | None:
-    try:
-        return float(text) if text is not None else None
-    except ValueError:
-        return None
-
-
-@dataclass(frozen=True)
-class ModelDescription:
-    """The parts of modelDescription.xml the DAE rules need."""
-
-    file: str
-    fmi_version: str | None
-    model_name: str | None
-    instantiation_token: str | None
-    naming_convention: str
-    model_exchange: ModelExchange | None
-    variables: tuple[Variable, ...]
-    structure: tuple[Unknown, ...]
-    line: int | None = None
-    has_co_simulation: bool = False
-    has_scheduled_execution: bool = False
-    default_experiment: DefaultExperiment | None = None
-    definitions: Definitions = NO_DEFINITIONS
-    by_vr: Mapping[int, Variable] = field(default_factory=dict, init=False, repr=False,
-                                          compare=False, hash=False)
-
-    def __post_init__(self) -> None:
-        index = {var.vr: var for var in self.variables if var.vr is not None}
-        if len(index) != sum(var.vr is not None for var in self.variables):
-            index = {}
-            for var in self.variables:
-                if var.vr is not None:
-                    index.setdefault(var.vr, var)  # duplicates are a finding, the first one wins
-        object.__setattr__(self, "by_vr", index)
-
-    def unknowns(self, kind: str) -> Iterator[Unknown]:
-        return (u for u in self.structure if u.kind == kind)
-
-    def state_vrs(self) -> tuple[int, ...]:
-        """Value references of the continuous states, in ContinuousStateDerivative order."""
-        out = []
-        for u in self.unknowns("ContinuousStateDerivative"):
-            der = self.by_vr.get(u.vr) if u.vr is not None else None
-            if der is not None and der.derivative is not None:
-                out.append(der.derivative)
-        return tuple(out)
-
-
-def default_variability(type_: str, causality: str) -> str:
-    """FMI 3.0 MV-11: the variability a variable has when the attribute is absent."""
-    if type_ == "Clock":
-        return "discrete"
-    if causality in ("parameter", "structuralParameter", "calculatedParameter"):
-        return "fixed"
-    return "continuous" if type_ in FLOAT_TYPES else "discrete"
-
-
-def default_initial(causality: str, variability: str) -> str | None:
-    """FMI 3.0 MV-20: the default of ``initial`` (None where the attribute is not allowed)."""
-    if causality == "independent":
-        return None
-    if variability == "constant":
-        return "exact" if causality in ("output", "local") else None
-    if variability in ("fixed", "tunable"):
-        if causality in ("parameter", "structuralParameter"):
-            return "exact"
-        if causality in ("calculatedParameter", "local"):
-            return "calculated"
-        return None
-    if causality == "input":
-        return "exact"
-    if causality in ("output", "local"):
-        return "calculated"
-    return None
-
+from .definitions import read_definitions
+from .model_parts import (  # noqa: F401  (the model's parts, read here, imported from here)
+    FLOAT_TYPES, MODEL_DESCRIPTION, NO_DETAILS, STRUCTURE_KINDS, VARIABLE_TYPES,
+    DefaultExperiment, Dimension, ModelDescription, ModelExchange, Variable, VariableDetails,
+    default_initial, default_variability,
+)
+from .unknowns import Unknown, parse_unknown, parse_vr, path_template  # noqa: F401 (re-export)
 
 # type, causality, variability, initial as written (None: attribute absent)
 _Kind = tuple[str, str | None, str | None, str | None]
@@ -393,3 +205,10 @@ def _default_experiment(el: etree._Element | None) -> DefaultExperiment | None:
         return None
     return DefaultExperiment(_float(el.get("startTime")), _float(el.get("stopTime")),
                              _float(el.get("tolerance")), _float(el.get("stepSize")))
+
+
+def _float(text: str | None) -> float | None:
+    try:
+        return float(text) if text is not None else None
+    except ValueError:
+        return None

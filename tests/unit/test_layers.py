@@ -30,7 +30,7 @@ FLOORS: list[tuple[str, ...]] = [
      "archive_base", "schemas", "schema_loader", "schema_messages", "xmlsafe", "element_path",
      "manifest", "layer", "reporters", "ruledocs", "baseline", "result_cache", "source_texts"),
     ("drafts", "catalogue", "config"),
-    ("numerics", "model", "unknowns", "bipartite", "matching", "dulmage_mendelsohn", "findings",
+    ("numerics", "model", "model_parts", "unknowns", "bipartite", "matching", "dulmage_mendelsohn", "findings",
      "paths", "progress", "process_pool", "background", "heap", "attributes", "definitions", "structured_names",
      "__init__", "sharding", "report_reader"),
 ]

@@ -3,7 +3,8 @@
 Checks and stages yield plain :class:`Violation` objects; the engine looks their rule up in the
 catalogue, applies the user's selection and severity overrides, groups repeated violations, adds
 the source line, and freezes everything into an :class:`FmuReport` (the selection is in
-:mod:`conformance.engine_options`, the grouping and source lines in :mod:`conformance.collector`).
+:mod:`conformance.engine_options`, the grouping and source lines in :mod:`conformance.collector`,
+the reading of the XML files and the run's state in :mod:`conformance.reading`).
 Nothing here raises for bad input: an exception inside a check becomes an ``internal-error``
 finding and the run goes on.
 """
@@ -17,28 +18,22 @@ from pathlib import Path
 from typing import Iterator, Sequence
 
 from . import __version__
-from .background import Background
 from .catalogue import Catalogue, default_catalogue
 from .checks import REGISTRY
 from .collector import Collector
 from .context import CheckContext
-from .drafts.detect import UNKNOWN, detect_draft, unrecognised_violations
-from .drafts.migrate import legacy_violations
 from .engine_options import EngineOptions, RuleSelection
-from .findings import FmuReport, Location, Report, Violation, evidence
-from .fmu import ArchiveLimits, ArchiveReadError, open_fmu
+from .findings import FmuReport, Report, Violation, evidence
+from .fmu import ArchiveLimits, open_fmu
 from .heap import RELEASE_FROM, release_freed_memory
-from .layer import manifest_missing, skip_reason
-from .manifest import MANIFEST, Manifest, read_manifest
-from .model import MODEL_DESCRIPTION, ModelDescription, read_model_description
+from .layer import skip_reason
+from .manifest import MANIFEST
+from .reading import RunState, read_manifest_file, read_model, read_xml
 from .schemas import (
     BUILD_DESCRIPTION_FILE,
     validate_build_description,
-    validate_manifest,
-    validate_model_description,
 )
 from .source_texts import SourceTexts
-from .xmlsafe import parse_xml
 
 log = logging.getLogger(__name__)
 
@@ -53,7 +48,7 @@ def check_fmu(path: Path, *, options: EngineOptions = EngineOptions(),
     limits = ArchiveLimits.from_options(catalogue["archive-too-large"].option_values)
     texts = SourceTexts(Path(path), limits)
     collector = Collector(selection, texts, options.group_threshold)
-    state = _State()
+    state = RunState()
     try:
         with _cyclic_gc_paused():
             _run(Path(path), limits, options, catalogue, selection, collector, texts, state)
@@ -91,32 +86,9 @@ def _cyclic_gc_paused() -> Iterator[None]:
             gc.enable()
 
 
-class _State:
-    def __init__(self) -> None:
-        self.draft: str | None = None
-        self.run: set[str] = set()
-        self.skipped: set[tuple[str, str]] = set()
-        self.not_run: set[tuple[str, str]] = set()   # skipped although they should have run
-        self.info: dict[str, object] = {}
-        self.unread: dict[str, str] = {}  # need -> why the file it stands for was not read
-        self.has_manifest = False
-        self.not_checked: str | None = None   # why nothing past the archive was checked
-
-    def skip_for(self, code: str, needs, have, reason: str) -> str:
-        """Skip a rule whose ``needs`` are not all there, and return the reason: the layer's
-        ``reason`` -- or, when the file a need stands for is there but was not read, that (a
-        failure, listed as not run)."""
-        missing = [n for n in needs if not have.get(n, False) and n in self.unread]
-        if missing:
-            reason = self.unread[missing[0]]
-            self.not_run.add((code, reason))
-        self.skipped.add((code, reason))
-        return reason
-
-
 def _run(path: Path, limits: ArchiveLimits, options: EngineOptions, catalogue: Catalogue,
          selection: RuleSelection, collector: Collector, texts: SourceTexts,
-         state: _State) -> None:
+         state: RunState) -> None:
     source, violations = open_fmu(path, limits=limits)
     collector.add_stage(violations)
     if source is None:
@@ -125,7 +97,7 @@ def _run(path: Path, limits: ArchiveLimits, options: EngineOptions, catalogue: C
     with source:
         names = tuple(source.names())
         state.has_manifest = MANIFEST in names
-        model = _read_model(source, names, options, collector, texts, state)
+        model = read_model(source, names, options, collector, texts, state)
         if model is not None and len(model.variables) >= RELEASE_FROM:
             release_freed_memory()  # the model's tree is gone: its pages before the manifest's
         if state.not_checked:
@@ -133,9 +105,9 @@ def _run(path: Path, limits: ArchiveLimits, options: EngineOptions, catalogue: C
             state.skipped.update((r.code, state.not_checked) for r in catalogue
                                  if r.code in selection.enabled and r.stage not in ("archive",))
             return
-        manifest = _read_manifest(source, names, options, collector, texts, state, model)
+        manifest = read_manifest_file(source, names, options, collector, texts, state, model)
         if BUILD_DESCRIPTION_FILE in names and not options.probes_only:  # a source FMU
-            build = _read_xml(source, BUILD_DESCRIPTION_FILE, collector, texts)
+            build = read_xml(source, BUILD_DESCRIPTION_FILE, collector, texts)
             collector.add_stage(validate_build_description(build) if build is not None else ())
         if model is not None:
             state.info.update(model_name=model.model_name, fmi_version=model.fmi_version,
@@ -147,7 +119,7 @@ def _run(path: Path, limits: ArchiveLimits, options: EngineOptions, catalogue: C
 
 
 def _run_probe_stage(source, ctx: CheckContext, options: EngineOptions, catalogue: Catalogue,
-                     selection: RuleSelection, collector: Collector, state: _State) -> None:
+                     selection: RuleSelection, collector: Collector, state: RunState) -> None:
     """Dynamic probes: load the binary in a worker process (conformance.probes)."""
     have = {"model-description": ctx.model is not None, "manifest": ctx.manifest is not None,
             "dae-layer": ctx.dae_layer,
@@ -179,102 +151,8 @@ def _run_probe_stage(source, ctx: CheckContext, options: EngineOptions, catalogu
     state.info.update(outcome.info)
 
 
-def _read(source, name: str, collector: Collector) -> bytes | None:
-    try:
-        return source.read(name)
-    except ArchiveReadError as exc:  # limits, corrupt data: the archive layer names the rule
-        collector.add_stage([exc.violation])
-    except Exception as exc:  # a last resort
-        collector.emit("archive-unreadable", Violation(
-            f"cannot read {name}: {exc}", Location(file=name)))
-    return None
-
-
-def _read_xml(source, name: str, collector: Collector, texts: SourceTexts):
-    """Read and safely parse one XML member; keep its bytes for source excerpts. The manifest
-    is read as importers read it when its only fault is an undeclared fmi-ls prefix."""
-    data = _read(source, name, collector)
-    if data is None:
-        return None
-    texts.keep(name, data)
-    tree, violations = parse_xml(data, file=name, bind_prefixes=name == MANIFEST)
-    collector.add_stage(violations)
-    return tree
-
-
-def _not_read(source, name: str, need: str, info_key: str, state: _State) -> bool:
-    """Whether ``name`` is in the FMU but was left out by an archive finding (too large, unsafe):
-    then it is "not read because of" that finding, not missing."""
-    rule = source.excluded().get(name)
-    if rule is None:
-        return False
-    state.unread[need] = f"{name} not read because of {rule}"
-    state.info[info_key] = f"not read because of {rule}"
-    return True
-
-
-def _read_model(source, names: Sequence[str], options: EngineOptions, collector: Collector,
-                texts: SourceTexts, state: _State) -> ModelDescription | None:
-    if MODEL_DESCRIPTION not in names:
-        if not _not_read(source, MODEL_DESCRIPTION, "model-description", "modelDescription",
-                         state):
-            collector.emit("model-description-missing", Violation(
-                "the FMU has no modelDescription.xml at its root",
-                Location(file=MODEL_DESCRIPTION)))
-        return None
-    tree = _read_xml(source, MODEL_DESCRIPTION, collector, texts)
-    if tree is None:
-        state.unread["model-description"] = f"{MODEL_DESCRIPTION} cannot be read or parsed"
-        return None
-    version = (tree.getroot().get("fmiVersion") or "").strip()
-    if version[:2] in ("1.", "2."):  # out of scope: said once, nothing else is checked
-        collector.emit("fmi-version-unsupported", Violation(
-            f"an FMI {version} FMU: fmi-ls-dae is a layered standard of FMI 3.0, so this FMU "
-            "is not checked", Location(file=MODEL_DESCRIPTION, line=tree.getroot().sourceline,
-                                       path="/fmiModelDescription"),
-            evidence(fmi_version=version)))
-        state.not_checked = f"FMI {version} FMU: fmi-ls-dae needs FMI 3.0"
-        return None
-    if options.probes_only:
-        return read_model_description(tree, file=MODEL_DESCRIPTION)
-    # the XSD validation (libxml2, without the GIL) runs beside the reading of the same tree
-    validation = Background(lambda: list(validate_model_description(tree)))
-    try:
-        return read_model_description(tree, file=MODEL_DESCRIPTION)
-    finally:
-        collector.add_stage(validation.result())
-
-
-def _read_manifest(source, names: Sequence[str], options: EngineOptions, collector: Collector,
-                   texts: SourceTexts, state: _State,
-                   model: ModelDescription | None) -> Manifest | None:
-    if MANIFEST not in names:
-        if _not_read(source, MANIFEST, "manifest", "manifest", state):
-            return None
-        collector.emit("manifest-missing", manifest_missing(model, names))
-        return None
-    tree = _read_xml(source, MANIFEST, collector, texts)
-    if tree is None:
-        state.info["manifest"] = "unreadable: nothing to check or probe"
-        state.unread["manifest"] = "the manifest cannot be read or parsed"
-        return None
-    draft = detect_draft(tree.getroot()) if options.draft == "auto" else options.draft
-    state.draft = draft
-    if draft == UNKNOWN:
-        collector.add_stage(unrecognised_violations(tree.getroot(), file=MANIFEST))
-        return None
-    if options.probes_only:
-        return read_manifest(tree, draft=draft, file=MANIFEST)
-    validation = Background(lambda: list(validate_manifest(tree, draft, file=MANIFEST)))
-    try:
-        return read_manifest(tree, draft=draft, file=MANIFEST)
-    finally:
-        collector.add_stage(validation.result())
-        collector.add_stage(legacy_violations(tree.getroot(), draft, file=MANIFEST))
-
-
 def _run_static(ctx: CheckContext, catalogue: Catalogue, selection: RuleSelection,
-                collector: Collector, state: _State) -> None:
+                collector: Collector, state: RunState) -> None:
     have = {"model-description": ctx.model is not None, "manifest": ctx.manifest is not None,
             "dae-layer": ctx.dae_layer}
     for rule in catalogue:

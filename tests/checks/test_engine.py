@@ -135,7 +135,9 @@ def test_a_reader_that_fails_never_calls_a_present_manifest_absent(tmp_path, mon
     def broken(*_args, **_kwargs):
         raise RecursionError("deep")
 
-    monkeypatch.setattr(engine, "detect_draft", broken)  # fails before the draft is known
+    from conformance import reading
+
+    monkeypatch.setattr(reading, "detect_draft", broken)  # fails before the draft is known
     report = check_fmu(_scene(tmp_path), options=EngineOptions(probes=False))
     assert "internal-error" in {f.name for f in report.findings}
     assert dict(report.info)["manifest"].startswith("present, not checked")

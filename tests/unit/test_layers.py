@@ -22,7 +22,7 @@ FLOORS: list[tuple[str, ...]] = [
     ("fleet",),
     ("simulate_fmu",),
     ("engine",),
-    ("engine_options", "collector"),
+    ("engine_options", "collector", "reading"),
     ("checks", "probes", "fixes"),
     ("simulate",),
     ("runtime", "precommit", "context"),

@@ -15,7 +15,7 @@ from typing import NamedTuple
 from lxml import etree
 
 from .drafts.detect import LS_NAMESPACE
-from .unknowns import Unknown, parse_unknown, parse_vr, path_template
+from .unknowns import Ordinals, Unknown, parse_unknown, parse_vr, path_template
 
 MANIFEST = "extra/org.fmi-standard.fmi-ls-dae/fmi-ls-manifest.xml"
 LS_ATTRIBUTES = ("fmi-ls-name", "fmi-ls-version", "fmi-ls-description")
@@ -155,7 +155,7 @@ def read_manifest(tree: etree._ElementTree, *, draft: str, file: str = MANIFEST)
 def _structure(ms: etree._Element, rname: str, file: str) -> list[Unknown]:
     out: list[Unknown] = []
     where = path_template(f"/{rname}/ModelStructure")
-    counters: dict[str, list] = {}   # kind -> [the kind's shared string, elements so far]
+    ordinals = Ordinals()
     shared: dict[str, tuple[str, ...]] = {}
     for el in ms:
         kind = el.tag
@@ -163,11 +163,7 @@ def _structure(ms: etree._Element, rname: str, file: str) -> list[Unknown]:
             continue
         if kind[0] == "{":
             kind = etree.QName(el).localname
-        counter = counters.get(kind)
-        if counter is None:
-            counter = counters[kind] = [kind, 0]
-        counter[1] += 1
-        kind, ordinal = counter
+        kind, ordinal = ordinals.next(kind)
         if kind == "Residual" and len(el):  # a legacy <Residual> with <Formulation> children
             formulations = [f for f in _elements(el) if _local(f) == "Formulation"]
             if formulations:

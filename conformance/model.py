@@ -16,7 +16,8 @@ from .model_parts import (  # noqa: F401  (the model's parts, read here, importe
     DefaultExperiment, Dimension, ModelDescription, ModelExchange, Variable, VariableDetails,
     default_initial, default_variability,
 )
-from .unknowns import Unknown, parse_unknown, parse_vr, path_template  # noqa: F401 (re-export)
+from .unknowns import Ordinals, parse_unknown, parse_vr, path_template
+from .unknowns import Unknown  # noqa: F401 (re-exported with the model's parts)
 
 # type, causality, variability, initial as written (None: attribute absent)
 _Kind = tuple[str, str | None, str | None, str | None]
@@ -175,19 +176,14 @@ def read_model_description(tree: etree._ElementTree, *, file: str = MODEL_DESCRI
     ms = _first(root, "ModelStructure")
     if ms is not None:
         where = path_template("/fmiModelDescription/ModelStructure")
-        counters: dict[str, list] = {}   # kind -> [the kind's shared string, elements so far]
+        ordinals = Ordinals()
         shared: dict[str, tuple[str, ...]] = {}
         for el in ms:
             tag = el.tag
             if not isinstance(tag, str):
                 continue
-            kind = tag if tag[0] != "{" else etree.QName(el).localname
-            counter = counters.get(kind)
-            if counter is None:
-                counter = counters[kind] = [kind, 0]
-            counter[1] += 1
-            structure.append(parse_unknown(el, counter[0], file, where, counter[1],
-                                           shared=shared))
+            kind, ordinal = ordinals.next(tag if tag[0] != "{" else etree.QName(el).localname)
+            structure.append(parse_unknown(el, kind, file, where, ordinal, shared=shared))
     return ModelDescription(
         file=file, fmi_version=root.get("fmiVersion"), model_name=root.get("modelName"),
         instantiation_token=root.get("instantiationToken"),

@@ -71,6 +71,21 @@ def path_template(prefix: str) -> str:
 _SHARED_KINDS_LIMIT = 1024   # distinct dependenciesKind texts shared per document
 
 
+class Ordinals:
+    """Each element kind of a ModelStructure: one shared string for its name, and how many
+    elements of it came so far (the ordinal of ``Output[3]`` in a path)."""
+
+    def __init__(self) -> None:
+        self._counts: dict[str, list] = {}   # kind -> [the kind's shared string, elements so far]
+
+    def next(self, kind: str) -> tuple[str, int]:
+        counter = self._counts.get(kind)
+        if counter is None:
+            counter = self._counts[kind] = [kind, 0]
+        counter[1] += 1
+        return counter[0], counter[1]
+
+
 def parse_unknown(el: etree._Element, kind: str, file: str, where: str, ordinal: int = 0,
                   attrs: Mapping[str, str] | None = None,
                   shared: dict[str, tuple[str, ...]] | None = None) -> Unknown:

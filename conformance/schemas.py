@@ -73,14 +73,8 @@ def validate_model_description(tree: XmlInput, *, file: str = MODEL_DESCRIPTION_
     """
     root = _root_of(tree)
     if etree.QName(root).text != "fmiModelDescription":
-        yield Violation(
-            message=f"the root element is <{written_name(root)}>; an FMI 3.0 modelDescription.xml "
-            "has the root <fmiModelDescription> in no namespace",
-            location=Location(file=file, line=root.sourceline, path="/" + written_name(root)),
-            evidence=evidence(schema=MODEL_DESCRIPTION_XSD),
-            subject="/" + written_name(root),
-            rule=RULE,
-        )
+        yield _wrong_core_root(root, "modelDescription.xml", "fmiModelDescription", file=file,
+                               schema_name=MODEL_DESCRIPTION_XSD, rule=RULE)
         return
     yield from _run(model_description_schema(), tree, file=file, schema_name=MODEL_DESCRIPTION_XSD)
 
@@ -94,14 +88,8 @@ def validate_build_description(tree: XmlInput, *, file: str = BUILD_DESCRIPTION_
     """
     root = _root_of(tree)
     if etree.QName(root).text != "fmiBuildDescription":
-        yield Violation(
-            message=f"the root element is <{written_name(root)}>; an FMI 3.0 buildDescription.xml "
-            "has the root <fmiBuildDescription> in no namespace",
-            location=Location(file=file, line=root.sourceline, path="/" + written_name(root)),
-            evidence=evidence(schema=BUILD_DESCRIPTION_XSD),
-            subject="/" + written_name(root),
-            rule=BUILD_DESCRIPTION_RULE,
-        )
+        yield _wrong_core_root(root, "buildDescription.xml", "fmiBuildDescription", file=file,
+                               schema_name=BUILD_DESCRIPTION_XSD, rule=BUILD_DESCRIPTION_RULE)
         return
     yield from _run(build_description_schema(), tree, file=file,
                     schema_name=BUILD_DESCRIPTION_XSD, rule=BUILD_DESCRIPTION_RULE)
@@ -162,6 +150,20 @@ def _run(
             subject=path,
             rule=rule,
         )
+
+
+def _wrong_core_root(root: etree._Element, document: str, expected: str, *, file: str,
+                     schema_name: str, rule: str) -> Violation:
+    """An FMI 3.0 document (modelDescription.xml, buildDescription.xml) with another root."""
+    written = written_name(root)
+    return Violation(
+        message=f"the root element is <{written}>; an FMI 3.0 {document} has the root "
+                f"<{expected}> in no namespace",
+        location=Location(file=file, line=root.sourceline, path="/" + written),
+        evidence=evidence(schema=schema_name),
+        subject="/" + written,
+        rule=rule,
+    )
 
 
 def _wrong_root(root: etree._Element, draft: str, expected: str, *, file: str, schema_name: str) -> Violation:

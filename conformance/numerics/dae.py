@@ -28,7 +28,8 @@ import numpy as np
 
 from .consistent import DaeSystem, consistent_start
 from .events import EventLog, first_time_event, read_indicators, run_through_events, summarise
-from .limits import Budget, EvaluationFailed, Stepper, Stop, blame_failures, scaled_condition
+from .limits import (Budget, EvaluationFailed, Stepper, Stop, blame_failures, blame_solver_failure,
+                     scaled_condition)
 from .settings import BUDGET, FMU_FAILED, INIT, OK, SINGULAR, SOLVER, Settings, Trajectory
 
 log = logging.getLogger(__name__)
@@ -237,22 +238,9 @@ def _finish(traj: Trajectory, run: _Run, stepper: Stepper) -> None:
     if failure is None:
         traj.status = OK
         return
-    pending = [f for f in run.failures if f[0] > stepper.t]
     _diagnose_at_end(traj, run, stepper)
-    if traj.status == SINGULAR:
-        return
-    if pending:
-        _, call, status = pending[-1]
-        traj.status = FMU_FAILED
-        traj.message = (f"{call} returned {status} at every step IDA tried beyond "
-                        f"t = {stepper.t:.10g}; reducing the step did not help")
-        traj.event = {"t": stepper.t, "call": call, "status": status,
-                      "failed_evaluations": len(pending), "solver": failure.message}
-        return
-    traj.status = SOLVER
-    traj.message = f"IDA stopped at t = {stepper.t:.10g}: {failure.message}"
-    traj.event = {"t": stepper.t, "solver_status": int(failure.status),
-                  "solver": failure.message}
+    if traj.status != SINGULAR:
+        blame_solver_failure(traj, run.failures, stepper, "IDA")
 
 
 def _diagnose_at_end(traj: Trajectory, run: _Run, stepper: Stepper) -> None:

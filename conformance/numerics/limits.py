@@ -204,3 +204,23 @@ def blame_failures(traj: Any, failures: list[tuple[float, str, str]], stop: Stop
                     f"t = {since:.10g}; smaller steps did not get past it ({stop.message})")
     traj.event = {**traj.event, "call": call, "status": status,
                   "failed_evaluations": len(recent)}
+
+
+def blame_solver_failure(traj: Any, failures: list[tuple[float, str, str]], stepper: Stepper,
+                         solver: str) -> None:
+    """A run the solver gave up: the model's failures (fmi3Discard, NaN) at every step it tried
+    beyond where it stopped are the cause, if there were any; otherwise the solver is."""
+    failure = stepper.failure
+    pending = [f for f in failures if f[0] > stepper.t]
+    if pending:
+        _, call, status = pending[-1]
+        traj.status = FMU_FAILED
+        traj.message = (f"{call} returned {status} at every step {solver} tried beyond "
+                        f"t = {stepper.t:.10g}; reducing the step did not help")
+        traj.event = {"t": stepper.t, "call": call, "status": status,
+                      "failed_evaluations": len(pending), "solver": failure.message}
+        return
+    traj.status = SOLVER
+    traj.message = f"{solver} stopped at t = {stepper.t:.10g}: {failure.message}"
+    traj.event = {"t": stepper.t, "solver_status": int(failure.status),
+                  "solver": failure.message}

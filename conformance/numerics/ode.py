@@ -14,7 +14,7 @@ from typing import Any, Protocol, Sequence
 import numpy as np
 
 from .events import EventLog, first_time_event, read_indicators, run_through_events, summarise
-from .limits import Budget, EvaluationFailed, Stepper, Stop, blame_failures
+from .limits import Budget, EvaluationFailed, Stepper, Stop, blame_failures, blame_solver_failure
 from .settings import BUDGET, FMU_FAILED, OK, SOLVER, Settings, Trajectory
 
 
@@ -127,22 +127,10 @@ def integrate_ode(system: OdeSystem, settings: Settings, *, t0: float, x0: np.nd
         else:
             run_through_events(stepper, system, log,  # type: ignore[arg-type]
                                next_time=first_time_event(start_update, t0), restart=restart)
-        failure = stepper.failure
-        pending = [f for f in failures if f[0] > stepper.t]
-        if failure is None:
+        if stepper.failure is None:
             traj.status = OK
-        elif pending:
-            _, call, status = pending[-1]
-            traj.status = FMU_FAILED
-            traj.message = (f"{call} returned {status} at every step CVODE tried beyond "
-                            f"t = {stepper.t:.10g}; reducing the step did not help")
-            traj.event = {"t": stepper.t, "call": call, "status": status,
-                          "failed_evaluations": len(pending), "solver": failure.message}
         else:
-            traj.status = SOLVER
-            traj.message = f"CVODE stopped at t = {stepper.t:.10g}: {failure.message}"
-            traj.event = {"t": stepper.t, "solver_status": int(failure.status),
-                          "solver": failure.message}
+            blame_solver_failure(traj, failures, stepper, "CVODE")
     except Stop as stop_:
         traj.status, traj.message = stop_.status, stop_.message
         traj.event = {"t": stop_.t, **stop_.details}

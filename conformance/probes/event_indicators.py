@@ -194,37 +194,42 @@ def _against_variables(ctx: ProbeContext, layout: Layout, names: list[str],
                        vrs: Sequence[int | None], point: Point, z: np.ndarray,
                        by_vr: np.ndarray, reported: set[int], *, rtol: float, atol: float
                        ) -> Iterator[Violation]:
-    for i, (x, y) in enumerate(zip(z, by_vr)):
-        if i in reported or not (math.isfinite(x) and math.isfinite(y)):
-            continue
-        if not close(float(x), float(y), rtol=rtol, atol=atol, scale=_scale(layout, vrs[i])):
-            reported.add(i)
-            yield Violation(
-                f"fmi3GetEventIndicators gives {{subject}} = {float(x):.17g} at point "
-                f"{point.label}, fmi3GetFloat64 of the same variable {float(y):.17g}: the "
-                "vector and the variable disagree", _where(ctx, vrs[i]),
-                evidence(point=point.label, t=point.t, index=i, event_indicators=float(x),
-                         get_float64=float(y), **_tolerance(layout, vrs[i], x, y, rtol, atol)),
-                names[i])
+    for i, x, y in _differing(layout, vrs, z, by_vr, reported, rtol=rtol, atol=atol):
+        yield Violation(
+            f"fmi3GetEventIndicators gives {{subject}} = {float(x):.17g} at point "
+            f"{point.label}, fmi3GetFloat64 of the same variable {float(y):.17g}: the "
+            "vector and the variable disagree", _where(ctx, vrs[i]),
+            evidence(point=point.label, t=point.t, index=i, event_indicators=float(x),
+                     get_float64=float(y), **_tolerance(layout, vrs[i], x, y, rtol, atol)),
+            names[i])
 
 
 def _against_first(ctx: ProbeContext, layout: Layout, names: list[str],
                    vrs: Sequence[int | None], point: Point, ref: np.ndarray, z: np.ndarray,
                    ref_previous: str, previous: str, reported: set[int], *, rtol: float,
                    atol: float) -> Iterator[Violation]:
-    for i, (x, y) in enumerate(zip(ref, z)):
+    for i, x, y in _differing(layout, vrs, ref, z, reported, rtol=rtol, atol=atol):
+        yield Violation(
+            f"the event indicator {{subject}} takes different values at the same point "
+            f"{point.label}: {float(x):.17g} (after {ref_previous}) and {float(y):.17g} "
+            f"(after {previous}); the FMU computes it from something it kept from an "
+            "earlier evaluation", _where(ctx, vrs[i]),
+            evidence(point=point.label, t=point.t, index=i, first=float(x),
+                     second=float(y), **_tolerance(layout, vrs[i], x, y, rtol, atol)),
+            names[i])
+
+
+def _differing(layout: Layout, vrs: Sequence[int | None], first: np.ndarray, second: np.ndarray,
+               reported: set[int], *, rtol: float, atol: float
+               ) -> Iterator[tuple[int, float, float]]:
+    """(index, first, second) of each indicator, not yet in ``reported``, whose two finite values
+    differ beyond the tolerance (scaled by its nominal); each is added to ``reported``."""
+    for i, (x, y) in enumerate(zip(first, second)):
         if i in reported or not (math.isfinite(x) and math.isfinite(y)):
             continue
         if not close(float(x), float(y), rtol=rtol, atol=atol, scale=_scale(layout, vrs[i])):
             reported.add(i)
-            yield Violation(
-                f"the event indicator {{subject}} takes different values at the same point "
-                f"{point.label}: {float(x):.17g} (after {ref_previous}) and {float(y):.17g} "
-                f"(after {previous}); the FMU computes it from something it kept from an "
-                "earlier evaluation", _where(ctx, vrs[i]),
-                evidence(point=point.label, t=point.t, index=i, first=float(x),
-                         second=float(y), **_tolerance(layout, vrs[i], x, y, rtol, atol)),
-                names[i])
+            yield i, x, y
 
 
 def _tolerance(layout: Layout, vr: int | None, x: float, y: float, rtol: float, atol: float

@@ -26,6 +26,14 @@ def reconfigure(inst: Instance, value: bool) -> None:
     configure(inst, value)
 
 
+def _free_quietly(inst: Instance) -> None:
+    """Free an instance that failed on its way to the mode asked for; the first error stands."""
+    try:
+        inst.free()
+    except FmiError:
+        pass
+
+
 def _check_mode(layout: Layout, mode: str) -> None:
     if mode == "ode" and layout.enable_status != "ok":
         raise Unavailable("the FMU has no usable enable parameter, hence no ODE mode"
@@ -56,10 +64,7 @@ def start_initialization(library: Library, mode: str, values: Mapping[int, float
         inst.set_float64(vrs, [float(values[vr]) for vr in vrs])
         inst.enter_initialization_mode(start_time)
     except BaseException:
-        try:
-            inst.free()
-        except FmiError:
-            pass
+        _free_quietly(inst)
         raise
     inst.mode = mode
     return inst
@@ -102,10 +107,7 @@ def start_instance(library: Library, mode: str, *, runtime_switch: bool = True,
         inst.discrete = inst.update_discrete_states()
         inst.enter_continuous_time_mode()
     except BaseException:
-        try:
-            inst.free()
-        except FmiError:
-            pass
+        _free_quietly(inst)
         raise
     inst.mode = mode
     return inst

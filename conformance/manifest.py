@@ -15,7 +15,7 @@ from typing import NamedTuple
 from lxml import etree
 
 from .drafts.detect import LS_NAMESPACE
-from .unknowns import Ordinals, Unknown, parse_unknown, parse_vr, path_template
+from .unknowns import Unknown, parse_unknown, parse_vr, path_template, read_structure
 
 MANIFEST = "extra/org.fmi-standard.fmi-ls-dae/fmi-ls-manifest.xml"
 LS_ATTRIBUTES = ("fmi-ls-name", "fmi-ls-version", "fmi-ls-description")
@@ -110,6 +110,35 @@ def _ref(el: etree._Element, where: str, ordinal: int = 0,
                                  raw if vr is None else None, None, extra, ordinal))
 
 
+def _refs(container: etree._Element, where: str) -> list[VrRef]:
+    """The elements of a list (``<AlgebraicVariables>``) as :func:`_ref` reads each, ``where``
+    a template, in one loop: a manifest may list 125k of them (reports/bench/static.md)."""
+    out: list[VrRef] = []
+    append = out.append
+    new = tuple.__new__   # skips the NamedTuple's Python-level __new__
+    names: dict[str, str] = {}
+    last_tag = element = None
+    ordinal = 0
+    for el in container:
+        tag = el.tag
+        if tag != last_tag:   # one kind of element, as a rule: look its name up once a run
+            if not isinstance(tag, str):
+                continue
+            element = _local(el)
+            element = names.setdefault(element, element)
+            last_tag = tag
+        ordinal += 1
+        items = el.items()
+        if len(items) == 1 and items[0][0] == "valueReference":   # the common case, fast
+            raw = items[0][1]
+            if len(raw) < 10 and raw.isdigit() and raw.isascii():
+                append(new(VrRef, (int(raw), el.sourceline, where, element, None, None, (),
+                                   ordinal)))
+                continue
+        append(_ref(el, where, ordinal, names))
+    return out
+
+
 def read_manifest(tree: etree._ElementTree, *, draft: str, file: str = MANIFEST) -> Manifest:
     """Normalise a manifest tree of any known shape; never raises on odd content."""
     root = tree.getroot()
@@ -129,9 +158,7 @@ def read_manifest(tree: etree._ElementTree, *, draft: str, file: str = MANIFEST)
         elif tag == "AlgebraicVariables":
             algebraic_line = child.sourceline
             where = path_template(f"/{rname}/AlgebraicVariables")
-            names: dict[str, str] = {}
-            for i, av in enumerate(_elements(child), 1):
-                algebraic.append(_ref(av, where, i, names))
+            algebraic.extend(_refs(child, where))
         elif tag == "ModelStructure":
             has_ms = True
             structure.extend(_structure(child, rname, file))
@@ -153,24 +180,17 @@ def read_manifest(tree: etree._ElementTree, *, draft: str, file: str = MANIFEST)
 
 
 def _structure(ms: etree._Element, rname: str, file: str) -> list[Unknown]:
-    out: list[Unknown] = []
     where = path_template(f"/{rname}/ModelStructure")
-    ordinals = Ordinals()
-    shared: dict[str, tuple[str, ...]] = {}
-    for el in ms:
-        kind = el.tag
-        if not isinstance(kind, str):
-            continue
-        if kind[0] == "{":
-            kind = etree.QName(el).localname
-        kind, ordinal = ordinals.next(kind)
-        if kind == "Residual" and len(el):  # a legacy <Residual> with <Formulation> children
-            formulations = [f for f in _elements(el) if _local(f) == "Formulation"]
-            if formulations:
-                unknown = parse_unknown(formulations[0], kind, file,
-                                        where + "/Formulation[1]", ordinal, shared=shared)
-                out.append(unknown._replace(formulations=len(formulations)))
-                continue
-        out.append(parse_unknown(el, kind, file, where, ordinal, shared=shared))
-    return out
 
+    def legacy(el: etree._Element, kind: str, ordinal: int, shared: dict) -> Unknown | None:
+        """A legacy <Residual> with <Formulation> children: read its first Formulation."""
+        if kind != "Residual":
+            return None
+        formulations = [f for f in _elements(el) if _local(f) == "Formulation"]
+        if not formulations:
+            return None
+        unknown = parse_unknown(formulations[0], kind, file, where + "/Formulation[1]",
+                                ordinal, shared=shared)
+        return unknown._replace(formulations=len(formulations))
+
+    return read_structure(ms, file, where, legacy)

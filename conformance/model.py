@@ -8,6 +8,8 @@ ModelStructure elements are :class:`~conformance.unknowns.Unknown`, as in the ma
 """
 from __future__ import annotations
 
+from operator import itemgetter
+
 from lxml import etree
 
 from .definitions import read_definitions
@@ -16,7 +18,7 @@ from .model_parts import (  # noqa: F401  (the model's parts, read here, importe
     DefaultExperiment, Dimension, ModelDescription, ModelExchange, Variable, VariableDetails,
     default_initial, default_variability,
 )
-from .unknowns import Ordinals, parse_unknown, parse_vr, path_template
+from .unknowns import parse_vr, path_template, read_structure
 from .unknowns import Unknown  # noqa: F401 (re-exported with the model's parts)
 
 # type, causality, variability, initial as written (None: attribute absent)
@@ -43,19 +45,35 @@ def _effective(kinds: dict[_Kind, tuple[str, str, str | None, str | None, str, s
 
 _SHARED_LIMIT = 4096   # distinct start values (and VariableDetails) shared per document
 
+# the attributes every variable is read for, in the order _variables unpacks them
+_READ = ("causality", "variability", "initial", "name", "valueReference", "start", "derivative",
+         "description")
+
+
+def _shape(keys: list[str]) -> tuple[itemgetter, bool]:
+    """How to read the attributes of a variable whose attribute names are ``keys``, in document
+    order: a getter of the values of :data:`_READ` from ``el.values() + [None]`` (an absent
+    attribute reads the trailing None), and whether it has attributes beyond them."""
+    index = {key: i for i, key in enumerate(keys)}
+    return itemgetter(*(index.get(name, -1) for name in _READ)), len(set(keys) - set(_READ)) > 0
+
 
 def _variables(container: etree._Element | None) -> list[Variable]:
     """The variables of ``<ModelVariables>``, in document order.
 
     One loop without a call per variable but the attribute reads: a modelDescription may hold
-    hundreds of thousands of variables (reports/bench/static.md).
+    hundreds of thousands of variables (reports/bench/static.md). A variable's attributes are
+    read in two calls (``keys()``, ``values()``) rather than one call per attribute; the
+    variables of a document have few distinct attribute lists, each read through one getter.
     """
     out: list[Variable] = []
     append = out.append
     new = tuple.__new__  # skips the NamedTuple's Python-level __new__
     kinds: dict[_Kind, tuple[str, str, str | None, str | None, str, str | None]] = {}
+    shapes: dict[tuple[str, ...], tuple[itemgetter, bool]] = {}
     shared: dict[VariableDetails, VariableDetails] = {}
     starts: dict[str, str] = {}   # "0", "1", "false"...: a start value is one string per document
+    last_keys = None
     for el in (container if container is not None else ()):
         tag = el.tag
         if not isinstance(tag, str):
@@ -63,14 +81,21 @@ def _variables(container: etree._Element | None) -> list[Variable]:
         type_ = tag if tag[0] != "{" else etree.QName(el).localname
         if type_ not in VARIABLE_TYPES:
             continue
-        get = el.get
-        key = (type_, get("causality"), get("variability"), get("initial"))
+        keys = el.keys()
+        if keys != last_keys:
+            found_shape = shapes.get(shape_key := tuple(keys))
+            if found_shape is None:
+                found_shape = shapes[shape_key] = _shape(keys)
+            read, extra = found_shape
+            last_keys = keys
+        values = el.values()
+        values.append(None)
+        (causality, variability, initial, name, raw_vr, start, derivative,
+         description) = read(values)
+        key = (type_, causality, variability, initial)
         found = kinds.get(key)
         type_, causality, declared_var, declared_init, variability, initial = (
             found if found is not None else _effective(kinds, key))
-        basics = (get("name"), get("valueReference"), get("start"), get("derivative"),
-                  get("description"))
-        name, raw_vr, start, derivative, description = basics
         if start is not None:
             if (known := starts.get(start)) is not None:
                 start = known
@@ -85,8 +110,7 @@ def _variables(container: etree._Element | None) -> list[Variable]:
                 raw_vr = None
         details = NO_DETAILS
         # attributes beyond the ones read above, or children: read the details (most have none)
-        if len(el) or raw_vr is not None or (
-                len(el.attrib) > 8 - key.count(None) - basics.count(None)):
+        if extra or len(el) or raw_vr is not None:
             start, details = _details(el, start, raw_vr, shared)
         append(new(Variable, (
             "" if name is None else name, vr, type_, causality, variability, initial,
@@ -95,8 +119,6 @@ def _variables(container: etree._Element | None) -> list[Variable]:
             el.sourceline, description, details,
         )))
     return out
-
-
 
 
 def _details(el: etree._Element, start: str | None, raw_vr: str | None,
@@ -175,15 +197,7 @@ def read_model_description(tree: etree._ElementTree, *, file: str = MODEL_DESCRI
     structure = []
     ms = _first(root, "ModelStructure")
     if ms is not None:
-        where = path_template("/fmiModelDescription/ModelStructure")
-        ordinals = Ordinals()
-        shared: dict[str, tuple[str, ...]] = {}
-        for el in ms:
-            tag = el.tag
-            if not isinstance(tag, str):
-                continue
-            kind, ordinal = ordinals.next(tag if tag[0] != "{" else etree.QName(el).localname)
-            structure.append(parse_unknown(el, kind, file, where, ordinal, shared=shared))
+        structure = read_structure(ms, file, path_template("/fmiModelDescription/ModelStructure"))
     return ModelDescription(
         file=file, fmi_version=root.get("fmiVersion"), model_name=root.get("modelName"),
         instantiation_token=root.get("instantiationToken"),

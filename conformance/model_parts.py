@@ -146,8 +146,10 @@ class ModelDescription:
                                           compare=False, hash=False)
 
     def __post_init__(self) -> None:
-        index = {var.vr: var for var in self.variables if var.vr is not None}
-        if len(index) != sum(var.vr is not None for var in self.variables):
+        vrs = list(map(attrgetter("vr"), self.variables))   # one pass at C speed
+        index = dict(zip(vrs, self.variables))
+        index.pop(None, None)
+        if len(index) != len(vrs) - vrs.count(None):
             index = {}
             for var in self.variables:
                 if var.vr is not None:

@@ -55,6 +55,7 @@ from lxml import etree
 
 from bench import generate as gen
 from bench.static_report import (SizeResult, ToolTiming, floor_ratio, fmpy_ratio, memory_ratio,
+                                 visit_ratio,
                                  render_markdown)
 
 logger = logging.getLogger(__name__)
@@ -128,7 +129,9 @@ def _fmpy_xsd() -> Path:
 # --- timing -------------------------------------------------------------------------------
 
 # The parse-only process (c): what any checker must do at least, in a process of its own.
-# It prints the seconds spent in the two parses (the parse floor).
+# It prints the seconds spent in the two parses (the parse floor), then the seconds of one
+# visit of every element from Python, reading its attribute values and its line (the least a
+# checker written in Python does per element to build anything from it: the visit floor).
 PARSE_ONLY_SCRIPT = (
     "import sys, time, zipfile\n"
     "from lxml import etree\n"
@@ -138,7 +141,11 @@ PARSE_ONLY_SCRIPT = (
     "model_tree = etree.fromstring(md)\n"
     "del md\n"
     "manifest_tree = etree.fromstring(manifest)\n"
-    "print(f'{time.perf_counter() - t0:.6f}')\n"
+    "t1 = time.perf_counter()\n"
+    "for root in (model_tree, manifest_tree):\n"
+    "    for el in root.iter():\n"
+    "        el.values(), el.sourceline\n"
+    "print(f'{t1 - t0:.6f} {time.perf_counter() - t1:.6f}')\n"
 )
 
 
@@ -207,10 +214,11 @@ def _time_lxml(md: bytes, schema: etree.XMLSchema, repeat: int, result: SizeResu
         del doc
 
 
-def _parse_floor(output: str) -> float:
-    """The seconds the parse-only process printed (its two parses)."""
+def _parse_floor(output: str) -> tuple[float, float]:
+    """The seconds the parse-only process printed: its two parses, its visit of the elements."""
     try:
-        return float(output.strip().splitlines()[-1])
+        parse, visit = output.strip().splitlines()[-1].split()
+        return float(parse), float(visit)
     except (ValueError, IndexError) as exc:
         raise HarnessError(f"the parse-only process printed {output[:200]!r}") from exc
 
@@ -256,7 +264,9 @@ def bench_size(
             output: list[str] | None = [] if timing is parse_only else None
             elapsed = _run_once(timing.command, timeout, timing, output)
             if output and elapsed is not None:
-                result.parse_floor_s.append(_parse_floor(output[0]))
+                parse, visit = _parse_floor(output[0])
+                result.parse_floor_s.append(parse)
+                result.visit_floor_s.append(visit)
             shown = f">{timeout:g} s (timeout)" if elapsed is None else f"{elapsed:.2f} s"
             logger.info("%d vars, %s run %d/%d: %s", result.n_variables, name, r + 1, repeat, shown)
             if elapsed is not None and r == 0 and repeat > 1 and elapsed > single_run_above:
@@ -415,6 +425,8 @@ def main(argv: list[str] | None = None) -> int:
         entry["ratio_fmpy_over_lsdae"] = fmpy_ratio(res, timeout)[0]
         entry["parse_floor_median_s"] = statistics.median(res.parse_floor_s)
         entry["ratio_lsdae_over_parse_floor"] = floor_ratio(res)
+        entry["visit_floor_median_s"] = statistics.median(res.visit_floor_s)
+        entry["ratio_parse_and_visit_over_parse_floor"] = visit_ratio(res)
         entry["ratio_lsdae_over_parse_only_peak_rss"] = memory_ratio(res)
         entry["lxml_parse_median_s"] = statistics.median(res.lxml_parse_s)
         entry["lxml_validate_median_s"] = statistics.median(res.lxml_validate_s)

@@ -7,7 +7,8 @@ variable. The steps they share live here, so both families resolve and classify 
 """
 from __future__ import annotations
 
-from typing import Callable, Iterable, Iterator, Sequence, TypeVar
+from operator import attrgetter, itemgetter
+from typing import Callable, Iterable, Iterator, Optional, Sequence, TypeVar
 
 from ..context import CheckContext
 from ..manifest import VrRef
@@ -16,17 +17,26 @@ from ..unknowns import Unknown
 
 Entry = TypeVar("Entry", VrRef, Unknown)
 Classes = dict[str | None, list[tuple[Entry, Variable]]]
+# The problem of each listed variable, or None when none has one.
+Problems = Callable[[Sequence[Variable]], Optional[Sequence[Optional[str]]]]
 
 
 def first_listings(entries: Sequence[Entry], model: ModelDescription
-                   ) -> Iterator[tuple[Entry, Variable]]:
-    """The first entry of each variable that resolves, with the variable."""
+                   ) -> list[tuple[Entry, Variable]]:
+    """The first entry of each variable that resolves, with the variable, in list order."""
+    by_vr = model.by_vr
+    vrs = list(map(attrgetter("vr"), entries))
+    found = list(map(by_vr.get, vrs))
+    if all(found) and len(set(vrs)) == len(vrs):
+        return list(zip(entries, found))  # the usual case (all resolve, no repeat), in C
     seen: set[int] = set()
-    for entry in entries:
-        if entry.vr is None or entry.vr not in model.by_vr or entry.vr in seen:
+    out = []
+    for entry, var in zip(entries, found):
+        if var is None or entry.vr in seen:
             continue
         seen.add(entry.vr)
-        yield entry, model.by_vr[entry.vr]
+        out.append((entry, var))
+    return out
 
 
 def repeats(entries: Sequence[Entry], model: ModelDescription
@@ -45,17 +55,21 @@ def repeats(entries: Sequence[Entry], model: ModelDescription
 
 def classified(ctx: CheckContext, key: str, wanted: str,
                listed: Callable[[], Iterable[tuple[Entry, Variable]]],
-               classifier: Callable[[], Callable[[Variable], str | None]]
-               ) -> list[tuple[Entry, Variable]]:
+               classifier: Callable[[], Problems]) -> list[tuple[Entry, Variable]]:
     """The entries whose variable has the ``wanted`` problem. The whole list is classified once
     per FMU (memoised under ``key``) and shared by the rules that partition it; ``classifier``
-    builds the per-variable test once (it may gather model-wide facts first)."""
+    builds the test once (it may gather model-wide facts first): given the listed variables, it
+    returns the problem of each, or None when none has one (the usual case, which it may decide
+    per class of variables rather than per variable)."""
 
     def classify() -> Classes:
-        problem = classifier()
+        listing = list(listed())
+        problems = classifier()(list(map(itemgetter(1), listing)))
+        if problems is None:
+            return {None: listing}
         classes: Classes = {}
-        for entry, var in listed():
-            classes.setdefault(problem(var), []).append((entry, var))
+        for problem, pair in zip(problems, listing):
+            classes.setdefault(problem, []).append(pair)
         return classes
 
     return ctx.memo(key, classify).get(wanted, [])

@@ -15,16 +15,18 @@ Legacy ``<Residual><Formulation/>...</Residual>`` elements arrive here as one Re
 from __future__ import annotations
 
 import logging
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator, Sequence
+from itertools import repeat
+from operator import attrgetter, is_not, itemgetter
 
 from ..context import Check, CheckContext
 from ..findings import Location, Violation, evidence
 from ..manifest import VrRef
-from ..model import Variable
+from ..model import FLOAT_TYPES, Variable
 from ..unknowns import Unknown
 from .algebraic import element_count, resolved_vrs, states_of
 from .dae_form import fully_implicit
-from .listing import classified, facts, first_listings, repeats
+from .listing import Problems, classified, facts, first_listings, repeats
 
 log = logging.getLogger(__name__)
 
@@ -37,13 +39,32 @@ NOT_FLOAT_CONTINUOUS = "not-float-continuous"
 STATE_OR_INPUT = "state-derivative-or-input"
 
 
+def _class_problem(type_: str, variability: str, causality: str) -> str | None:
+    """The first reason a variable of this type, variability and causality cannot be a
+    residual, before its role is known, or None."""
+    if type_ not in FLOAT_TYPES or variability != "continuous":
+        return NOT_FLOAT_CONTINUOUS
+    return STATE_OR_INPUT if causality in SET_BY_IMPORTER else None
+
+
 def residual_problem(var: Variable, *, states: frozenset[int]) -> str | None:
     """The first reason ``var`` cannot be a residual, or None if it can."""
-    if not var.is_float or var.variability != "continuous":
-        return NOT_FLOAT_CONTINUOUS
-    if var.vr in states or var.derivative is not None or var.causality in SET_BY_IMPORTER:
+    problem = _class_problem(var.type, var.variability, var.causality)
+    if problem is None and (var.vr in states or var.derivative is not None):
         return STATE_OR_INPUT
-    return None
+    return problem
+
+
+def _problems(variables: Sequence[Variable], states: frozenset[int]
+              ) -> list[str | None] | None:
+    """:func:`residual_problem` of each variable, or None when none has one: decided per
+    distinct (type, variability, causality) and by set tests, in C, for the usual clean list."""
+    classes = set(map(attrgetter("type", "variability", "causality"), variables))
+    if (not any(_class_problem(*c) for c in classes)
+            and states.isdisjoint(map(attrgetter("vr"), variables))
+            and not any(map(is_not, map(attrgetter("derivative"), variables), repeat(None)))):
+        return None
+    return [residual_problem(v, states=states) for v in variables]
 
 
 def _classified(ctx: CheckContext, wanted: str) -> Iterator[tuple[Unknown, Variable]]:
@@ -51,14 +72,16 @@ def _classified(ctx: CheckContext, wanted: str) -> Iterator[tuple[Unknown, Varia
     if model is None or manifest is None:
         return
 
-    def listed() -> Iterator[tuple[Unknown, Variable]]:
+    def listed() -> list[tuple[Unknown, Variable]]:
         algebraic = resolved_vrs(model, manifest.algebraic)  # those the algebraic rules explain
-        return ((res, var) for res, var in first_listings(manifest.residuals, model)
-                if res.vr not in algebraic)
+        listing = first_listings(manifest.residuals, model)
+        if algebraic.isdisjoint(map(attrgetter("vr"), map(itemgetter(0), listing))):
+            return listing  # the usual case, decided in C
+        return [(res, var) for res, var in listing if res.vr not in algebraic]
 
-    def classifier() -> Callable[[Variable], str | None]:
+    def classifier() -> Problems:
         states = states_of(ctx)
-        return lambda var: residual_problem(var, states=states)
+        return lambda variables: _problems(variables, states)
 
     yield from classified(ctx, "residual-classes", wanted, listed, classifier)
 

@@ -8,6 +8,7 @@ probe samples from (or blames the binary for) a value flagged here.
 """
 from __future__ import annotations
 
+from operator import attrgetter
 from typing import Iterator
 
 from ..attributes import (
@@ -33,14 +34,28 @@ _ADVICE = {
 def _problems(model: ModelDescription) -> dict[str, list[tuple[Variable, Problem]]]:
     """Every problem of every Float variable, by rule, in document order: one pass shared by
     the three rules."""
+    floats = [var for var in model.variables if var.type in FLOAT_TYPES]
+    if not _any_problem(floats):
+        return {}
     found: dict[str, list[tuple[Variable, Problem]]] = {}
-    for var in model.variables:
-        if var.type not in FLOAT_TYPES or (var.start is None and var.nominal is None
-                                           and var.minimum is None and var.maximum is None):
+    for var in floats:
+        if var.start is None and var.nominal is None and var.minimum is None \
+                and var.maximum is None:
             continue
         for problem in attribute_problems(var.start, var.nominal, var.minimum, var.maximum):
             found.setdefault(problem.rule, []).append((var, problem))
     return found
+
+
+def _any_problem(floats: list[Variable]) -> bool:
+    """Whether a variable has a problem, decided per distinct start, nominal and (min, max)
+    text: a document repeats few, and the faults of each part are independent of the others'."""
+    starts = set(map(attrgetter("start"), floats))
+    nominals = set(map(attrgetter("nominal"), floats))
+    ranges = set(zip(map(attrgetter("minimum"), floats), map(attrgetter("maximum"), floats)))
+    return (any(any(attribute_problems(start, None, None, None)) for start in starts)
+            or any(any(attribute_problems(None, nominal, None, None)) for nominal in nominals)
+            or any(any(attribute_problems(None, None, lo, hi)) for lo, hi in ranges))
 
 
 def _violations(ctx: CheckContext, rule: str) -> Iterator[Violation]:

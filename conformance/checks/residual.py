@@ -153,23 +153,26 @@ def residual_count_mismatch(ctx: CheckContext) -> Iterator[Violation]:
     sides = []
     refs: tuple[VrRef, ...] | tuple[Unknown, ...]
     for refs in (manifest.algebraic, manifest.residuals):
-        variables: dict[int, Variable] = {}
-        for ref in refs:
-            if ref.vr is None or ref.vr not in model.by_vr or ref.vr in variables:
-                # An unresolved entry has no size, and with a repeat it is unclear whether an
-                # entry is extra or stands for a missing one: the unknown-vr and duplicate
-                # rules explain those, and the count is judged once they are fixed.
-                return
-            variables[ref.vr] = model.by_vr[ref.vr]
-        sizes = [element_count(model, v) for v in variables.values()]
+        vrs = list(map(attrgetter("vr"), refs))
+        variables = list(map(model.by_vr.get, vrs))  # by_vr.get(None) is None
+        if not all(variables) or len(set(vrs)) != len(vrs):
+            # An unresolved entry has no size, and with a repeat it is unclear whether an
+            # entry is extra or stands for a missing one: the unknown-vr and duplicate
+            # rules explain those, and the count is judged once they are fixed.
+            return
+        if not any(map(attrgetter("dimensions"), variables)):
+            sides.append((len(variables), variables))  # all scalars, the usual case: in C
+            continue
+        sizes = [element_count(model, v) for v in variables]
         known = [s for s in sizes if s is not None]
         if len(known) != len(sizes):
             log.debug("residual-count-mismatch skipped: an array size is not known statically")
             return
-        sides.append((sum(known), [v.name for v in variables.values()]))
-    (n_alg, alg_names), (n_res, res_names) = sides
+        sides.append((sum(known), variables))
+    (n_alg, alg_vars), (n_res, res_vars) = sides
     if n_alg == n_res or fully_implicit(model, manifest) is not None:
         return  # the fully implicit form is fully-implicit-form's finding
+    alg_names, res_names = [v.name for v in alg_vars], [v.name for v in res_vars]
     if manifest.algebraic_line is not None:
         where = Location(file=manifest.file, line=manifest.algebraic_line,
                          path=f"/{manifest.root_name}/AlgebraicVariables")

@@ -5,9 +5,9 @@ both classify variables by their DAE-mode role and name it in their messages.
 """
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass
 from operator import attrgetter
-from typing import Iterable
 
 from ..context import CheckContext
 from ..manifest import Manifest, VrRef

@@ -8,7 +8,7 @@ variable. The steps they share live here, so both families resolve and classify 
 from __future__ import annotations
 
 from operator import attrgetter, itemgetter
-from typing import Callable, Iterable, Iterator, Optional, Sequence, TypeVar
+from typing import Callable, Iterable, Iterator, Sequence, TypeVar
 
 from ..context import CheckContext
 from ..manifest import VrRef
@@ -18,7 +18,7 @@ from ..unknowns import Unknown
 Entry = TypeVar("Entry", VrRef, Unknown)
 Classes = dict[str | None, list[tuple[Entry, Variable]]]
 # The problem of each listed variable, or None when none has one.
-Problems = Callable[[Sequence[Variable]], Optional[Sequence[Optional[str]]]]
+Problems = Callable[[Sequence[Variable]], Sequence[str | None] | None]
 
 
 def first_listings(entries: Sequence[Entry], model: ModelDescription

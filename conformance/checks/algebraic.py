@@ -23,6 +23,7 @@ from ..manifest import Manifest, VrRef
 from ..model import FLOAT_TYPES, ModelDescription, Variable
 from ..unknowns import Unknown, parse_uint
 from .listing import Problems, classified, facts, first_listings, repeats
+from .model_analysis import analyse
 
 log = logging.getLogger(__name__)
 
@@ -47,7 +48,7 @@ def continuous_states(model: ModelDescription, manifest: Manifest | None) -> fro
     ``ContinuousStateDerivative``, in modelDescription.xml (ODE mode) or in the manifest (DAE
     mode): a variable that is a state in either mode cannot be an algebraic variable or residual.
     """
-    unknowns = list(model.unknowns("ContinuousStateDerivative"))
+    unknowns = list(analyse(model).unknowns("ContinuousStateDerivative"))
     if manifest is not None:
         unknowns.extend(manifest.unknowns("ContinuousStateDerivative"))
     # one pass in C: the listed derivatives (by_vr.get(None) is None), then what they name

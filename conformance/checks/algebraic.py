@@ -13,7 +13,7 @@ The helpers :func:`continuous_states` and :func:`element_count` are shared with 
 from __future__ import annotations
 
 import logging
-from collections.abc import Iterable, Iterator, Sequence
+from collections.abc import Iterator, Sequence
 from itertools import repeat
 from operator import attrgetter, is_not
 
@@ -21,8 +21,16 @@ from ..context import Check, CheckContext
 from ..findings import Location, Violation, evidence
 from ..manifest import Manifest, VrRef
 from ..model import FLOAT_TYPES, ModelDescription, Variable
-from ..unknowns import Unknown, parse_uint
-from .listing import Problems, classified, facts, first_listings, repeats
+from ..unknowns import parse_uint
+from .listing import (
+    Problems,
+    classified,
+    facts,
+    first_listings,
+    repeats,
+    resolution,
+    resolved_vrs,
+)
 from .model_analysis import analyse
 
 log = logging.getLogger(__name__)
@@ -82,11 +90,6 @@ def element_count(model: ModelDescription, var: Variable) -> int | None:
     return count
 
 
-def resolved_vrs(model: ModelDescription, refs: Iterable[VrRef | Unknown]) -> frozenset[int]:
-    """The value references among ``refs`` (VrRef or Unknown) that name a variable."""
-    return frozenset(filter(model.by_vr.__contains__, map(attrgetter("vr"), refs)))
-
-
 def _class_problem(type_: str, causality: str, variability: str) -> str | None:
     """The first reason a variable of this type, causality and variability cannot be an
     algebraic variable, or None."""
@@ -132,11 +135,11 @@ def _classified(ctx: CheckContext, wanted: str) -> Iterator[tuple[VrRef, Variabl
 
     def classifier() -> Problems:
         states = states_of(ctx)
-        residuals = resolved_vrs(model, manifest.residuals)
+        residuals = resolved_vrs(resolution(ctx, "residuals"))
         return lambda variables: _problems(variables, states, residuals)
 
     yield from classified(ctx, "algebraic-classes", wanted,
-                          lambda: first_listings(manifest.algebraic, model), classifier)
+                          lambda: first_listings(resolution(ctx, "algebraic")), classifier)
 
 
 def _at_ref(ctx: CheckContext, ref: VrRef) -> Location:

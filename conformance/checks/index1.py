@@ -21,6 +21,7 @@ from ..findings import Location, Violation, evidence
 from ..manifest import VrRef
 from ..model import ModelDescription, Variable
 from ..unknowns import Unknown
+from .listing import Resolution, resolution
 
 if TYPE_CHECKING:
     from ..dulmage_mendelsohn import DulmageMendelsohn
@@ -116,17 +117,14 @@ def _explain(dm: DulmageMendelsohn, rows: _Elements, cols: _Elements, limit: int
     return "; ".join(parts)
 
 
-def _resolve(refs: Sequence[VrRef | Unknown], model: ModelDescription
-             ) -> list[tuple[VrRef | Unknown, Variable]] | None:
-    """The distinct variables of ``refs``; None when one does not resolve (reported elsewhere)."""
-    vrs = list(map(attrgetter("vr"), refs))
-    found = list(map(model.by_vr.get, vrs))  # by_vr.get(None) is None
-    if not all(found):
+def _resolve(listed: Resolution) -> list[tuple[VrRef | Unknown, Variable]] | None:
+    """The distinct variables of a list; None when one does not resolve (reported elsewhere)."""
+    if not listed.complete:
         return None
-    if len(set(vrs)) == len(vrs):
-        return list(zip(refs, found))  # the usual case (no repeat), in C
+    if listed.distinct:
+        return list(zip(listed.entries, listed.variables))  # the usual case, in C
     out: dict[int, tuple[VrRef | Unknown, Variable]] = {}
-    for ref, var in zip(refs, found):
+    for ref, var in zip(listed.entries, listed.variables):
         out.setdefault(ref.vr, (ref, var))  # type: ignore[arg-type]
     return list(out.values())
 
@@ -196,8 +194,8 @@ def index1_structurally_singular(ctx: CheckContext, *, max_names: int, max_evide
     """The residual/algebraic-variable graph has a matching of size min(#residuals, #algebraic)."""
     model, manifest = ctx.model, ctx.manifest
     assert model is not None and manifest is not None
-    algebraic = _resolve(manifest.algebraic, model)
-    residuals = _resolve(manifest.residuals, model)
+    algebraic = _resolve(resolution(ctx, "algebraic"))
+    residuals = _resolve(resolution(ctx, "residuals"))
     if algebraic is None or residuals is None or not algebraic or not residuals:
         return
     alg_vars = list(map(itemgetter(1), algebraic))

@@ -7,8 +7,9 @@ variable. The steps they share live here, so both families resolve and classify 
 """
 from __future__ import annotations
 
+from itertools import compress
 from operator import attrgetter, itemgetter
-from typing import Callable, Iterable, Iterator, Sequence, TypeVar
+from typing import Callable, Iterable, Iterator, NamedTuple, Sequence, TypeVar
 
 from ..context import CheckContext
 from ..manifest import VrRef
@@ -21,17 +22,41 @@ Classes = dict[str | None, list[tuple[Entry, Variable]]]
 Problems = Callable[[Sequence[Variable]], Sequence[str | None] | None]
 
 
-def first_listings(entries: Sequence[Entry], model: ModelDescription
-                   ) -> list[tuple[Entry, Variable]]:
+class Resolution(NamedTuple):
+    """A manifest list resolved against the model: each entry's value reference and variable
+    (None when it names none), in list order."""
+
+    entries: Sequence[VrRef] | Sequence[Unknown]
+    vrs: list[int | None]
+    variables: list[Variable | None]
+    complete: bool      # every entry names a variable
+    distinct: bool      # no value reference is listed twice
+
+
+def resolution(ctx: CheckContext, name: str) -> Resolution:
+    """The manifest's ``algebraic`` or ``residuals`` list resolved, once per FMU: the list
+    rules, the count rule and the index-1 rule all start from it."""
+    def compute() -> Resolution:
+        assert ctx.model is not None and ctx.manifest is not None
+        entries = getattr(ctx.manifest, name)
+        vrs = list(map(attrgetter("vr"), entries))
+        variables = list(map(ctx.model.by_vr.get, vrs))  # by_vr.get(None) is None
+        return Resolution(entries, vrs, variables, all(variables), len(set(vrs)) == len(vrs))
+    return ctx.memo(f"resolution-{name}", compute)
+
+
+def resolved_vrs(listed: Resolution) -> frozenset[int]:
+    """The value references of the list that name a variable."""
+    return frozenset(compress(listed.vrs, listed.variables))
+
+
+def first_listings(listed: Resolution) -> list[tuple[Entry, Variable]]:
     """The first entry of each variable that resolves, with the variable, in list order."""
-    by_vr = model.by_vr
-    vrs = list(map(attrgetter("vr"), entries))
-    found = list(map(by_vr.get, vrs))
-    if all(found) and len(set(vrs)) == len(vrs):
-        return list(zip(entries, found))  # the usual case (all resolve, no repeat), in C
+    if listed.complete and listed.distinct:
+        return list(zip(listed.entries, listed.variables))  # the usual case, in C
     seen: set[int] = set()
     out = []
-    for entry, var in zip(entries, found):
+    for entry, var in zip(listed.entries, listed.variables):
         if var is None or entry.vr in seen:
             continue
         seen.add(entry.vr)

@@ -21,12 +21,19 @@ from operator import attrgetter, is_not, itemgetter
 
 from ..context import Check, CheckContext
 from ..findings import Location, Violation, evidence
-from ..manifest import VrRef
 from ..model import FLOAT_TYPES, Variable
 from ..unknowns import Unknown
-from .algebraic import element_count, resolved_vrs, states_of
+from .algebraic import element_count, states_of
 from .dae_form import fully_implicit
-from .listing import Problems, classified, facts, first_listings, repeats
+from .listing import (
+    Problems,
+    classified,
+    facts,
+    first_listings,
+    repeats,
+    resolution,
+    resolved_vrs,
+)
 
 log = logging.getLogger(__name__)
 
@@ -73,8 +80,8 @@ def _classified(ctx: CheckContext, wanted: str) -> Iterator[tuple[Unknown, Varia
         return
 
     def listed() -> list[tuple[Unknown, Variable]]:
-        algebraic = resolved_vrs(model, manifest.algebraic)  # those the algebraic rules explain
-        listing = first_listings(manifest.residuals, model)
+        algebraic = resolved_vrs(resolution(ctx, "algebraic"))  # the algebraic rules' to explain
+        listing = first_listings(resolution(ctx, "residuals"))
         if algebraic.isdisjoint(map(attrgetter("vr"), map(itemgetter(0), listing))):
             return listing  # the usual case, decided in C
         return [(res, var) for res, var in listing if res.vr not in algebraic]
@@ -151,11 +158,10 @@ def residual_count_mismatch(ctx: CheckContext) -> Iterator[Violation]:
         return
     model, manifest = ctx.model, ctx.manifest
     sides = []
-    refs: tuple[VrRef, ...] | tuple[Unknown, ...]
-    for refs in (manifest.algebraic, manifest.residuals):
-        vrs = list(map(attrgetter("vr"), refs))
-        variables = list(map(model.by_vr.get, vrs))  # by_vr.get(None) is None
-        if not all(variables) or len(set(vrs)) != len(vrs):
+    for name in ("algebraic", "residuals"):
+        listed = resolution(ctx, name)
+        variables = listed.variables
+        if not (listed.complete and listed.distinct):
             # An unresolved entry has no size, and with a repeat it is unclear whether an
             # entry is extra or stands for a missing one: the unknown-vr and duplicate
             # rules explain those, and the count is judged once they are fixed.

@@ -176,7 +176,7 @@ def algebraic_duplicate(ctx: CheckContext) -> Iterator[Violation]:
     """DAE-20 (derived): no algebraic variable is listed twice."""
     if ctx.model is None or ctx.manifest is None:
         return
-    for ref, first, var in repeats(ctx.manifest.algebraic, ctx.model):
+    for ref, first, var in repeats(resolution(ctx, "algebraic")):
         yield Violation(
             "algebraic variable {subject} is listed more than once in <AlgebraicVariables>; "
             "list each algebraic variable once",

@@ -13,7 +13,7 @@ from typing import Callable, Iterable, Iterator, NamedTuple, Sequence, TypeVar
 
 from ..context import CheckContext
 from ..manifest import VrRef
-from ..model import ModelDescription, Variable
+from ..model import Variable
 from ..unknowns import Unknown
 
 Entry = TypeVar("Entry", VrRef, Unknown)
@@ -64,16 +64,17 @@ def first_listings(listed: Resolution) -> list[tuple[Entry, Variable]]:
     return out
 
 
-def repeats(entries: Sequence[Entry], model: ModelDescription
-            ) -> Iterator[tuple[Entry, Entry, Variable]]:
+def repeats(listed: Resolution) -> Iterator[tuple[Entry, Entry, Variable]]:
     """Each later entry of a variable already listed: (repeat, first entry, variable).
     Unresolved entries are left to the unknown-vr rules."""
+    if listed.distinct:
+        return  # the usual case
     first: dict[int, Entry] = {}
-    for entry in entries:
-        if entry.vr is None or entry.vr not in model.by_vr:
+    for entry, var in zip(listed.entries, listed.variables):
+        if var is None:
             continue
         if entry.vr in first:
-            yield entry, first[entry.vr], model.by_vr[entry.vr]
+            yield entry, first[entry.vr], var
         else:
             first[entry.vr] = entry
 

@@ -133,7 +133,7 @@ def output_set_mismatch(ctx: CheckContext) -> Iterator[Violation]:
     listed = manifest.unknowns("Output")
     if not listed:
         return  # an absent Output list is inherited from modelDescription.xml
-    outputs = {v.vr: v for v in model.variables if v.causality == "output" and v.vr is not None}
+    outputs = {v.vr: v for v in analyse(model).by_causality["output"] if v.vr is not None}
     roles = roles_of(ctx)
     seen = set()
     for u in listed:

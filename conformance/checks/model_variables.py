@@ -77,9 +77,8 @@ def variable_name_duplicate(ctx: CheckContext) -> Iterator[Violation]:
     if (model := ctx.model) is None:
         return
     names = [var.name for var in model.variables]
-    aliased = [var for var in model.variables if getattr(var, "aliases", None)]
-    if not aliased and len(set(names)) == len(names):
-        return  # the usual case
+    if not any(map(attrgetter("aliases"), model.variables)) and len(set(names)) == len(names):
+        return  # the usual case, decided in C
     seen: dict[str, str] = {}   # name -> the variable that first used it
     for var in model.variables:
         entries = [(var.name, var.line, False)] if var.name else []

@@ -119,7 +119,7 @@ def residual_duplicate(ctx: CheckContext) -> Iterator[Violation]:
     """DAE-31: no two Residual elements name the same variable."""
     if ctx.model is None or ctx.manifest is None:
         return
-    for res, first, var in repeats(ctx.manifest.residuals, ctx.model):
+    for res, first, var in repeats(resolution(ctx, "residuals")):
         yield Violation(
             "residual {subject} is listed in more than one Residual element; list each "
             "residual once",

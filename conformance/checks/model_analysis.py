@@ -9,13 +9,12 @@ per model with dicts and sets, so a model with 100,000 variables costs milliseco
 from __future__ import annotations
 
 import weakref
-from itertools import repeat
-from operator import attrgetter, is_not
+from operator import attrgetter
 from typing import Optional
 
 from ..context import CheckContext
 from ..findings import Location
-from ..model import FLOAT_TYPES, ModelDescription, Variable
+from ..model import FLOAT_TYPES, ModelDescription, Variable, VariableDetails
 from ..unknowns import Unknown
 
 CAUSALITIES = frozenset({"structuralParameter", "parameter", "calculatedParameter", "input",
@@ -141,11 +140,15 @@ class _Analysis:
         self.derivatives: list[Variable] = []             # variables with a derivative attribute
         self.by_causality: dict[str, list[Variable]] = {"output": [], "calculatedParameter": []}
         self.clocked_vrs: set[int] = set()                # clocked variables and Clocks (MS-05 d)
+        # The distinct sets of rarely given attributes (nominal, min, max, clocks, unit, ...):
+        # the reader shares one VariableDetails among variables with the same ones, so a model
+        # holds few, and a rule on those attributes decides a clean model from these alone.
+        self.details: set[VariableDetails] = set(map(attrgetter("details"), model.variables))
         memo: dict[tuple, Verdict] = {}
         # One loop with few attribute reads per variable: it runs 500k times in a large model.
         outputs, calculated = self.by_causality["output"], self.by_causality["calculatedParameter"]
         variables = model.variables
-        any_clocks = any(map(is_not, map(attrgetter("clocks"), variables), repeat(None)))
+        any_clocks = any(d.clocks is not None for d in self.details)
         for var in variables:
             causality = var.causality
             if var.derivative is not None:

@@ -21,7 +21,7 @@ from ..context import Check, CheckContext
 from ..definitions import TypeDefinition, UnitDefinition
 from ..findings import Location, Violation, evidence
 from ..model import ModelDescription, Variable
-from .model_analysis import var_loc
+from .model_analysis import analyse, var_loc
 
 _SHOWN = 8  # defined names listed in the evidence
 _ON_VARIABLE = "{subject}"
@@ -33,6 +33,10 @@ def _typed(ctx: CheckContext) -> list[Variable]:
     """The variables with a declaredType, unit, displayUnit or alias displayUnit (memoised)."""
     def compute() -> list[Variable]:
         assert ctx.model is not None
+        if not any(d.declared_type is not None or d.unit is not None
+                   or d.display_unit is not None or d.alias_display_units
+                   for d in analyse(ctx.model).details):
+            return []  # the usual case: decided from the model's few distinct details
         return [v for v in ctx.model.variables
                 if v.declared_type is not None or v.unit is not None
                 or v.display_unit is not None or v.alias_display_units]

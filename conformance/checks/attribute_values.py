@@ -8,8 +8,8 @@ probe samples from (or blames the binary for) a value flagged here.
 """
 from __future__ import annotations
 
-from operator import attrgetter
 from collections.abc import Iterable, Iterator
+from operator import attrgetter
 
 from ..attributes import (
     MIN_ABOVE_MAX,

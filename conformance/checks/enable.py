@@ -17,6 +17,7 @@ from ..context import CheckContext
 from ..findings import Location, Violation, evidence
 from ..manifest import VrRef
 from ..model import Variable
+from .model_analysis import analyse
 
 SETTABLE_VARIABILITIES = ("fixed", "tunable")
 FALSE_VALUES = ("false", "0")
@@ -175,7 +176,8 @@ def enable_parameter_not_scalar(ctx: CheckContext) -> Iterator[Violation]:
     model = ctx.model
     if model is None:
         return
-    arrays = list(filter(attrgetter("dimensions"), model.variables))  # in C: most have none
+    arrays = list(filter(attrgetter("dimensions"), model.variables)) \
+        if analyse(model).has_arrays else []
     for var in _resolved(ctx):
         if var.dimensions:
             yield Violation(

@@ -22,6 +22,7 @@ from ..manifest import VrRef
 from ..model import ModelDescription, Variable
 from ..unknowns import Unknown
 from .listing import Resolution, resolution
+from .model_analysis import analyse
 
 if TYPE_CHECKING:
     from ..dulmage_mendelsohn import DulmageMendelsohn
@@ -131,8 +132,8 @@ def _resolve(listed: Resolution) -> list[tuple[VrRef | Unknown, Variable]] | Non
 
 def _sizes(variables: Sequence[Variable], model: ModelDescription) -> list[int | None]:
     """:func:`_size` of each variable."""
-    if not any(map(attrgetter("dimensions"), variables)):
-        return [1] * len(variables)  # all scalars, the usual case: decided in C
+    if not analyse(model).has_arrays:
+        return [1] * len(variables)  # all scalars, the usual case
     return [_size(var, model) for var in variables]
 
 

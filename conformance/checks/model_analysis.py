@@ -144,6 +144,7 @@ class _Analysis:
         # the reader shares one VariableDetails among variables with the same ones, so a model
         # holds few, and a rule on those attributes decides a clean model from these alone.
         self.details: set[VariableDetails] = set(map(attrgetter("details"), model.variables))
+        self.has_arrays = any(d.dimensions for d in self.details)  # a variable has <Dimension>
         memo: dict[tuple, Verdict] = {}
         # One loop with few attribute reads per variable: it runs 500k times in a large model.
         outputs, calculated = self.by_causality["output"], self.by_causality["calculatedParameter"]

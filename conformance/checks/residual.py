@@ -34,6 +34,7 @@ from .listing import (
     resolution,
     resolved_vrs,
 )
+from .model_analysis import analyse
 
 log = logging.getLogger(__name__)
 
@@ -166,8 +167,8 @@ def residual_count_mismatch(ctx: CheckContext) -> Iterator[Violation]:
             # entry is extra or stands for a missing one: the unknown-vr and duplicate
             # rules explain those, and the count is judged once they are fixed.
             return
-        if not any(map(attrgetter("dimensions"), variables)):
-            sides.append((len(variables), variables))  # all scalars, the usual case: in C
+        if not analyse(model).has_arrays:
+            sides.append((len(variables), variables))  # all scalars, the usual case
             continue
         sizes = [element_count(model, v) for v in variables]
         known = [s for s in sizes if s is not None]

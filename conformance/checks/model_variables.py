@@ -48,9 +48,10 @@ def value_reference_duplicate(ctx: CheckContext) -> Iterator[Violation]:
     """DAE502 MV-01: no two variables share a valueReference."""
     if (model := ctx.model) is None:
         return
-    with_vr = [var for var in model.variables if var.vr is not None]
-    if len(with_vr) == len(model.by_vr):
+    vrs = list(map(attrgetter("vr"), model.variables))
+    if len(vrs) - vrs.count(None) == len(model.by_vr):
         return  # the usual case: the index kept every variable
+    with_vr = [var for var in model.variables if var.vr is not None]
     first: dict[int, Variable] = {}
     for var in with_vr:
         owner = first.setdefault(var.vr, var)  # type: ignore[arg-type]

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 from functools import partial
-from itertools import chain, compress
+from itertools import chain
 from operator import attrgetter, is_not, itemgetter
 
 from ..context import Check, CheckContext
@@ -54,11 +54,13 @@ def model_structure_unknown_vr(ctx: CheckContext) -> Iterator[Violation]:
 _given = partial(is_not, None)  # a value reference that is not None (a test in C)
 
 
-def _listed(model: ModelDescription, kind: str) -> list[tuple[Unknown, Variable]]:
+def _listed(model: ModelDescription, kind: str) -> Iterator[tuple[Unknown, Variable]]:
     """Resolved elements of one ModelStructure kind (unresolved ones are DAE510's)."""
-    unknowns = analyse(model).unknowns(kind)
-    found = list(map(model.by_vr.get, map(attrgetter("vr"), unknowns)))  # get(None) is None
-    return list(compress(zip(unknowns, found), found))  # in C
+    by_vr = model.by_vr
+    for u in analyse(model).unknowns(kind):
+        var = by_vr.get(u.vr) if u.vr is not None else None
+        if var is not None:
+            yield u, var
 
 
 def _set_mismatch(model: ModelDescription, kind: str, expected: dict[int, str],
@@ -123,12 +125,12 @@ def model_structure_derivative_missing(ctx: CheckContext) -> Iterator[Violation]
     if (model := ctx.model) is None or model.model_exchange is None:
         return
     by_vr = model.by_vr
-    pairs = _listed(model, "ContinuousStateDerivative")
-    listed = set(map(attrgetter("vr"), map(itemgetter(0), pairs)))
-    covered = set(map(attrgetter("derivative"), map(itemgetter(1), pairs)))  # states named
-    covered.discard(None)
-    if listed.issuperset(map(attrgetter("vr"), analyse(model).derivatives)):
-        return  # the usual case: every variable with a derivative attribute is listed
+    listed: set[int] = set()
+    covered: set[int] = set()   # states that a listed derivative already names
+    for u, der in _listed(model, "ContinuousStateDerivative"):
+        listed.add(u.vr)  # type: ignore[arg-type]
+        if der.derivative is not None:
+            covered.add(der.derivative)
     for var in analyse(model).derivatives:
         if var.vr in listed or var.derivative in covered:
             continue

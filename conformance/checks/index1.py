@@ -13,7 +13,7 @@ import logging
 from bisect import bisect_right
 from itertools import accumulate
 from math import prod
-from operator import attrgetter, itemgetter
+from operator import attrgetter
 from typing import TYPE_CHECKING, Iterable, Iterator, Sequence
 
 from ..context import Check, CheckContext
@@ -118,16 +118,17 @@ def _explain(dm: DulmageMendelsohn, rows: _Elements, cols: _Elements, limit: int
     return "; ".join(parts)
 
 
-def _resolve(listed: Resolution) -> list[tuple[VrRef | Unknown, Variable]] | None:
-    """The distinct variables of a list; None when one does not resolve (reported elsewhere)."""
+def _resolve(listed: Resolution) -> tuple[Sequence[VrRef | Unknown], list[Variable]] | None:
+    """The first entry of each distinct variable of a list, and the variables; None when one
+    does not resolve (reported elsewhere)."""
     if not listed.complete:
         return None
     if listed.distinct:
-        return list(zip(listed.entries, listed.variables))  # the usual case, in C
+        return listed.entries, listed.variables  # type: ignore[return-value]  # the usual case
     out: dict[int, tuple[VrRef | Unknown, Variable]] = {}
     for ref, var in zip(listed.entries, listed.variables):
         out.setdefault(ref.vr, (ref, var))  # type: ignore[arg-type]
-    return list(out.values())
+    return [ref for ref, _ in out.values()], [var for _, var in out.values()]
 
 
 def _sizes(variables: Sequence[Variable], model: ModelDescription) -> list[int | None]:
@@ -137,8 +138,9 @@ def _sizes(variables: Sequence[Variable], model: ModelDescription) -> list[int |
     return [_size(var, model) for var in variables]
 
 
-def _row_deps(residuals: Sequence[tuple[Unknown, Variable]], row_sizes: Sequence[int | None],
-              cols: _Elements, max_edges: int) -> list[list[int] | None] | None:
+def _row_deps(res_refs: Sequence[Unknown], res_vars: Sequence[Variable],
+              row_sizes: Sequence[int | None], cols: _Elements, max_edges: int
+              ) -> list[list[int] | None] | None:
     """The columns each residual element depends on (None: all); None when a size is unknown
     or the graph has more than ``max_edges`` element edges (the check is then skipped)."""
     alg_vrs = map(attrgetter("vr"), cols.vars)
@@ -147,7 +149,7 @@ def _row_deps(residuals: Sequence[tuple[Unknown, Variable]], row_sizes: Sequence
         # is no longer than its dependencies attribute, so the edges are counted afterwards.
         col = dict(zip(alg_vrs, range(len(cols))))
         rows = [None if deps is None else [col[vr] for vr in deps if vr in col]
-                for deps in map(attrgetter("dependencies"), map(itemgetter(0), residuals))]
+                for deps in map(attrgetter("dependencies"), res_refs)]
         if sum(map(len, filter(None, rows))) > max_edges:
             log.warning("index-1 check skipped: more than %d element edges", max_edges)
             return None
@@ -155,7 +157,7 @@ def _row_deps(residuals: Sequence[tuple[Unknown, Variable]], row_sizes: Sequence
     col_of = dict(zip(alg_vrs, cols.ranges()))
     row_deps: list[list[int] | None] = []
     edges = 0
-    for (ref, var), size in zip(residuals, row_sizes):
+    for ref, var, size in zip(res_refs, res_vars, row_sizes):
         if size is None:
             log.info("index-1 check skipped: size of %s is not known", var.name)
             return None
@@ -197,20 +199,20 @@ def index1_structurally_singular(ctx: CheckContext, *, max_names: int, max_evide
     assert model is not None and manifest is not None
     algebraic = _resolve(resolution(ctx, "algebraic"))
     residuals = _resolve(resolution(ctx, "residuals"))
-    if algebraic is None or residuals is None or not algebraic or not residuals:
+    if algebraic is None or residuals is None or not algebraic[0] or not residuals[0]:
         return
-    alg_vars = list(map(itemgetter(1), algebraic))
+    (alg_refs, alg_vars), (res_refs, res_vars) = algebraic, residuals
     col_sizes = _sizes(alg_vars, model)
     if None in col_sizes:
         log.info("index-1 check skipped: size of %s is not known",
                  alg_vars[col_sizes.index(None)].name)
         return
     cols = _Elements(alg_vars, col_sizes)  # type: ignore[arg-type]
-    row_sizes = _sizes(list(map(itemgetter(1), residuals)), model)
-    row_deps = _row_deps(residuals, row_sizes, cols, max_edges)  # type: ignore[arg-type]
+    row_sizes = _sizes(res_vars, model)
+    row_deps = _row_deps(res_refs, res_vars, row_sizes, cols, max_edges)  # type: ignore[arg-type]
     if row_deps is None:
         return
-    rows = _Elements(list(map(itemgetter(1), residuals)), row_sizes)  # type: ignore[arg-type]
+    rows = _Elements(res_vars, row_sizes)  # type: ignore[arg-type]
     needed = min(len(rows), len(cols))
     if _greedy_matching_size(row_deps, len(cols)) >= needed:
         return  # a matching of full size was found without the graph machinery
@@ -220,8 +222,8 @@ def index1_structurally_singular(ctx: CheckContext, *, max_names: int, max_evide
     dm = dulmage_mendelsohn(BipartitePattern.from_rows(row_deps, len(cols)))
     if dm.rank >= needed:
         return
-    yield _violation(dm, needed, rows, cols, [r for r, _ in residuals],
-                     [a for a, _ in algebraic], manifest.file, max_names, max_evidence)
+    yield _violation(dm, needed, rows, cols, res_refs, alg_refs, manifest.file, max_names,
+                     max_evidence)
 
 
 def _violation(dm: DulmageMendelsohn, needed: int, rows: _Elements, cols: _Elements,

@@ -8,8 +8,8 @@ variable. The steps they share live here, so both families resolve and classify 
 from __future__ import annotations
 
 from itertools import compress
-from operator import attrgetter, itemgetter
-from typing import Callable, Iterable, Iterator, NamedTuple, Sequence, TypeVar
+from operator import attrgetter
+from typing import Callable, Iterator, NamedTuple, Sequence, TypeVar
 
 from ..context import CheckContext
 from ..manifest import VrRef
@@ -18,6 +18,8 @@ from ..unknowns import Unknown
 
 Entry = TypeVar("Entry", VrRef, Unknown)
 Classes = dict[str | None, list[tuple[Entry, Variable]]]
+# A list as two columns: the entries, and the variable each names.
+Listing = tuple[Sequence[Entry], Sequence[Variable]]
 # The problem of each listed variable, or None when none has one.
 Problems = Callable[[Sequence[Variable]], Sequence[str | None] | None]
 
@@ -50,18 +52,19 @@ def resolved_vrs(listed: Resolution) -> frozenset[int]:
     return frozenset(compress(listed.vrs, listed.variables))
 
 
-def first_listings(listed: Resolution) -> list[tuple[Entry, Variable]]:
-    """The first entry of each variable that resolves, with the variable, in list order."""
+def first_listings(listed: Resolution) -> Listing:
+    """The first entry of each variable that resolves, and the variables, in list order."""
     if listed.complete and listed.distinct:
-        return list(zip(listed.entries, listed.variables))  # the usual case, in C
+        return listed.entries, listed.variables  # type: ignore[return-value]  # the usual case
     seen: set[int] = set()
-    out = []
+    entries, variables = [], []
     for entry, var in zip(listed.entries, listed.variables):
         if var is None or entry.vr in seen:
             continue
         seen.add(entry.vr)
-        out.append((entry, var))
-    return out
+        entries.append(entry)
+        variables.append(var)
+    return entries, variables
 
 
 def repeats(listed: Resolution) -> Iterator[tuple[Entry, Entry, Variable]]:
@@ -80,8 +83,8 @@ def repeats(listed: Resolution) -> Iterator[tuple[Entry, Entry, Variable]]:
 
 
 def classified(ctx: CheckContext, key: str, wanted: str,
-               listed: Callable[[], Iterable[tuple[Entry, Variable]]],
-               classifier: Callable[[], Problems]) -> list[tuple[Entry, Variable]]:
+               listed: Callable[[], Listing], classifier: Callable[[], Problems]
+               ) -> list[tuple[Entry, Variable]]:
     """The entries whose variable has the ``wanted`` problem. The whole list is classified once
     per FMU (memoised under ``key``) and shared by the rules that partition it; ``classifier``
     builds the test once (it may gather model-wide facts first): given the listed variables, it
@@ -89,13 +92,13 @@ def classified(ctx: CheckContext, key: str, wanted: str,
     per class of variables rather than per variable)."""
 
     def classify() -> Classes:
-        listing = list(listed())
-        problems = classifier()(list(map(itemgetter(1), listing)))
+        entries, variables = listed()
+        problems = classifier()(variables)
         if problems is None:
-            return {None: listing}
+            return {}  # no entry has a problem (the rules ask only for problem classes)
         classes: Classes = {}
-        for problem, pair in zip(problems, listing):
-            classes.setdefault(problem, []).append(pair)
+        for problem, entry, var in zip(problems, entries, variables):
+            classes.setdefault(problem, []).append((entry, var))
         return classes
 
     return ctx.memo(key, classify).get(wanted, [])

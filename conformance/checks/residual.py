@@ -17,7 +17,7 @@ from __future__ import annotations
 import logging
 from collections.abc import Iterator, Sequence
 from itertools import repeat
-from operator import attrgetter, is_not, itemgetter
+from operator import attrgetter, is_not
 
 from ..context import Check, CheckContext
 from ..findings import Location, Violation, evidence
@@ -26,6 +26,7 @@ from ..unknowns import Unknown
 from .algebraic import element_count, states_of
 from .dae_form import fully_implicit
 from .listing import (
+    Listing,
     Problems,
     classified,
     facts,
@@ -80,12 +81,13 @@ def _classified(ctx: CheckContext, wanted: str) -> Iterator[tuple[Unknown, Varia
     if model is None or manifest is None:
         return
 
-    def listed() -> list[tuple[Unknown, Variable]]:
+    def listed() -> Listing:
         algebraic = resolved_vrs(resolution(ctx, "algebraic"))  # the algebraic rules' to explain
-        listing = first_listings(resolution(ctx, "residuals"))
-        if algebraic.isdisjoint(map(attrgetter("vr"), map(itemgetter(0), listing))):
-            return listing  # the usual case, decided in C
-        return [(res, var) for res, var in listing if res.vr not in algebraic]
+        entries, variables = first_listings(resolution(ctx, "residuals"))
+        if algebraic.isdisjoint(map(attrgetter("vr"), entries)):
+            return entries, variables  # the usual case, decided in C
+        kept = [(res, var) for res, var in zip(entries, variables) if res.vr not in algebraic]
+        return [res for res, _ in kept], [var for _, var in kept]
 
     def classifier() -> Problems:
         states = states_of(ctx)

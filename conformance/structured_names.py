@@ -50,9 +50,21 @@ def is_structured_name(name: str) -> bool:
     return _NAME.fullmatch(name) is not None
 
 
+# Every character class of the grammar holds all ten digits or none, and no literal is a digit:
+# writing each digit as 0 keeps a legal name legal and an illegal one illegal.
+_DIGITS_AS_ZERO = str.maketrans("123456789", "000000000")
+
+
 def all_structured(names: Iterable[str]) -> bool:
-    """Whether every name is legal (the loop runs in C: the usual case for 100,000 names)."""
-    return None not in map(_NAME.fullmatch, names)
+    """Whether every name is legal. The names of a model (x[1], x[2], ... x[100000]) have few
+    shapes once their digits are written as 0, so each shape is matched once; the rewriting runs
+    in C over the names joined by NUL, a character that XML, and so no name, can hold."""
+    names = list(names)
+    joined = "\x00".join(names)
+    if joined.count("\x00") != max(len(names) - 1, 0):  # a name holds NUL: one match each
+        return None not in map(_NAME.fullmatch, names)
+    shapes = set(joined.translate(_DIGITS_AS_ZERO).split("\x00")) if names else set()
+    return None not in map(_NAME.fullmatch, shapes)
 
 
 class NameProblem(NamedTuple):

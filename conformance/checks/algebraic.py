@@ -13,14 +13,25 @@ The helpers :func:`continuous_states` and :func:`element_count` are shared with 
 from __future__ import annotations
 
 import logging
-from collections.abc import Callable, Iterable, Iterator
+from collections.abc import Iterator, Sequence
+from itertools import repeat
+from operator import attrgetter, is_not
 
 from ..context import Check, CheckContext
 from ..findings import Location, Violation, evidence
 from ..manifest import Manifest, VrRef
-from ..model import ModelDescription, Variable
-from ..unknowns import Unknown, parse_uint
-from .listing import classified, facts, first_listings, repeats
+from ..model import FLOAT_TYPES, ModelDescription, Variable
+from ..unknowns import parse_uint
+from .listing import (
+    Problems,
+    classified,
+    facts,
+    first_listings,
+    repeats,
+    resolution,
+    resolved_vrs,
+)
+from .model_analysis import analyse
 
 log = logging.getLogger(__name__)
 
@@ -45,14 +56,13 @@ def continuous_states(model: ModelDescription, manifest: Manifest | None) -> fro
     ``ContinuousStateDerivative``, in modelDescription.xml (ODE mode) or in the manifest (DAE
     mode): a variable that is a state in either mode cannot be an algebraic variable or residual.
     """
-    unknowns = list(model.unknowns("ContinuousStateDerivative"))
+    unknowns = list(analyse(model).unknowns("ContinuousStateDerivative"))
     if manifest is not None:
         unknowns.extend(manifest.unknowns("ContinuousStateDerivative"))
-    states = set()
-    for u in unknowns:
-        der = model.by_vr.get(u.vr) if u.vr is not None else None
-        if der is not None and der.derivative is not None:
-            states.add(der.derivative)
+    # one pass in C: the listed derivatives (by_vr.get(None) is None), then what they name
+    derivatives = filter(None, map(model.by_vr.get, map(attrgetter("vr"), unknowns)))
+    states = set(map(attrgetter("derivative"), derivatives))
+    states.discard(None)
     return frozenset(states)
 
 
@@ -80,20 +90,24 @@ def element_count(model: ModelDescription, var: Variable) -> int | None:
     return count
 
 
-def resolved_vrs(model: ModelDescription, refs: Iterable[VrRef | Unknown]) -> frozenset[int]:
-    """The value references among ``refs`` (VrRef or Unknown) that name a variable."""
-    return frozenset(r.vr for r in refs if r.vr is not None and r.vr in model.by_vr)
+def _class_problem(type_: str, causality: str, variability: str) -> str | None:
+    """The first reason a variable of this type, causality and variability cannot be an
+    algebraic variable, or None."""
+    if type_ not in FLOAT_TYPES:
+        return NOT_FLOAT
+    if causality in KNOWN_CAUSALITIES:
+        return KNOWN
+    if variability != "continuous":
+        return NOT_CONTINUOUS
+    return None
 
 
 def algebraic_problem(var: Variable, *, states: frozenset[int],
                       residuals: frozenset[int]) -> str | None:
     """The first reason ``var`` cannot be an algebraic variable, or None if it can."""
-    if not var.is_float:
-        return NOT_FLOAT
-    if var.causality in KNOWN_CAUSALITIES:
-        return KNOWN
-    if var.variability != "continuous":
-        return NOT_CONTINUOUS
+    problem = _class_problem(var.type, var.causality, var.variability)
+    if problem is not None:
+        return problem
     if var.vr in states or var.derivative is not None:
         return STATE
     if var.vr in residuals:
@@ -101,18 +115,31 @@ def algebraic_problem(var: Variable, *, states: frozenset[int],
     return None
 
 
+def _problems(variables: Sequence[Variable], states: frozenset[int],
+              residuals: frozenset[int]) -> list[str | None] | None:
+    """:func:`algebraic_problem` of each variable, or None when none has one: decided per
+    distinct (type, causality, variability) and by set tests, in C, for the usual clean list."""
+    classes = set(map(attrgetter("type", "causality", "variability"), variables))
+    vrs = set(map(attrgetter("vr"), variables))
+    if (not any(_class_problem(*c) for c in classes) and vrs.isdisjoint(states)
+            and vrs.isdisjoint(residuals)
+            and not any(map(is_not, map(attrgetter("derivative"), variables), repeat(None)))):
+        return None
+    return [algebraic_problem(v, states=states, residuals=residuals) for v in variables]
+
+
 def _classified(ctx: CheckContext, wanted: str) -> Iterator[tuple[VrRef, Variable]]:
     model, manifest = ctx.model, ctx.manifest
     if model is None or manifest is None:
         return
 
-    def classifier() -> Callable[[Variable], str | None]:
+    def classifier() -> Problems:
         states = states_of(ctx)
-        residuals = resolved_vrs(model, manifest.residuals)
-        return lambda var: algebraic_problem(var, states=states, residuals=residuals)
+        residuals = resolved_vrs(resolution(ctx, "residuals"))
+        return lambda variables: _problems(variables, states, residuals)
 
     yield from classified(ctx, "algebraic-classes", wanted,
-                          lambda: first_listings(manifest.algebraic, model), classifier)
+                          lambda: first_listings(resolution(ctx, "algebraic")), classifier)
 
 
 def _at_ref(ctx: CheckContext, ref: VrRef) -> Location:
@@ -149,7 +176,7 @@ def algebraic_duplicate(ctx: CheckContext) -> Iterator[Violation]:
     """DAE-20 (derived): no algebraic variable is listed twice."""
     if ctx.model is None or ctx.manifest is None:
         return
-    for ref, first, var in repeats(ctx.manifest.algebraic, ctx.model):
+    for ref, first, var in repeats(resolution(ctx, "algebraic")):
         yield Violation(
             "algebraic variable {subject} is listed more than once in <AlgebraicVariables>; "
             "list each algebraic variable once",

@@ -8,7 +8,8 @@ probe samples from (or blames the binary for) a value flagged here.
 """
 from __future__ import annotations
 
-from typing import Iterator
+from collections.abc import Iterable, Iterator
+from operator import attrgetter
 
 from ..attributes import (
     MIN_ABOVE_MAX,
@@ -19,8 +20,8 @@ from ..attributes import (
 )
 from ..context import Check, CheckContext
 from ..findings import Violation, evidence
-from ..model import FLOAT_TYPES, ModelDescription, Variable
-from .model_analysis import var_loc
+from ..model import FLOAT_TYPES, ModelDescription, Variable, VariableDetails
+from .model_analysis import analyse, var_loc
 
 _ADVICE = {
     NOT_FINITE: "write a finite number (leave min or max out for no bound)",
@@ -33,14 +34,30 @@ _ADVICE = {
 def _problems(model: ModelDescription) -> dict[str, list[tuple[Variable, Problem]]]:
     """Every problem of every Float variable, by rule, in document order: one pass shared by
     the three rules."""
+    floats = [var for var in model.variables if var.type in FLOAT_TYPES]
+    if not _any_problem(floats, analyse(model).details):
+        return {}
     found: dict[str, list[tuple[Variable, Problem]]] = {}
-    for var in model.variables:
-        if var.type not in FLOAT_TYPES or (var.start is None and var.nominal is None
-                                           and var.minimum is None and var.maximum is None):
+    for var in floats:
+        if var.start is None and var.nominal is None and var.minimum is None \
+                and var.maximum is None:
             continue
         for problem in attribute_problems(var.start, var.nominal, var.minimum, var.maximum):
             found.setdefault(problem.rule, []).append((var, problem))
     return found
+
+
+def _any_problem(floats: list[Variable], details: Iterable[VariableDetails]) -> bool:
+    """Whether a variable may have a problem, decided per distinct start, nominal and (min, max)
+    text: a document repeats few, and the faults of each part are independent of the others'.
+    Nominal, min and max come from the model's distinct details (of every variable, not only
+    the floats: an extra suspect only costs the exact pass)."""
+    starts = set(map(attrgetter("start"), floats))
+    nominals = {d.nominal for d in details}
+    ranges = {(d.minimum, d.maximum) for d in details}
+    return (any(any(attribute_problems(start, None, None, None)) for start in starts)
+            or any(any(attribute_problems(None, nominal, None, None)) for nominal in nominals)
+            or any(any(attribute_problems(None, None, lo, hi)) for lo, hi in ranges))
 
 
 def _violations(ctx: CheckContext, rule: str) -> Iterator[Violation]:

@@ -5,11 +5,14 @@ both classify variables by their DAE-mode role and name it in their messages.
 """
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass
+from operator import attrgetter
 
 from ..context import CheckContext
-from ..manifest import Manifest
+from ..manifest import Manifest, VrRef
 from ..model import ModelDescription, Variable
+from ..unknowns import Unknown
 
 
 @dataclass(frozen=True)
@@ -29,16 +32,19 @@ class DaeRoles:
     def of(cls, model: ModelDescription, manifest: Manifest) -> DaeRoles:
         csd = manifest.unknowns("ContinuousStateDerivative") or \
             tuple(model.unknowns("ContinuousStateDerivative"))
-        derivatives = {u.vr for u in csd if u.vr is not None}
-        states = set()
-        for vr in derivatives:
-            var = model.by_vr.get(vr)
-            if var is not None and var.derivative is not None:
-                states.add(var.derivative)
-        return cls(
-            algebraic=frozenset(a.vr for a in manifest.algebraic if a.vr is not None),
-            states=frozenset(states), derivatives=frozenset(derivatives),
-            residuals=frozenset(u.vr for u in manifest.residuals if u.vr is not None))
+        derivatives = _vrs(csd)
+        # the states the listed derivatives name, in C (by_vr.get(None) is None)
+        states = set(map(attrgetter("derivative"), filter(None, map(model.by_vr.get, derivatives))))
+        states.discard(None)
+        return cls(algebraic=_vrs(manifest.algebraic), states=frozenset(states),
+                   derivatives=derivatives, residuals=_vrs(manifest.residuals))
+
+
+def _vrs(refs: Iterable[VrRef | Unknown]) -> frozenset[int]:
+    """The value references of ``refs`` that are given."""
+    vrs = set(map(attrgetter("vr"), refs))
+    vrs.discard(None)
+    return frozenset(vrs)
 
 
 def roles_of(ctx: CheckContext) -> DaeRoles:

@@ -10,12 +10,14 @@ so a single fault gives a single finding.
 """
 from __future__ import annotations
 
+from operator import attrgetter
 from typing import Iterator
 
 from ..context import CheckContext
 from ..findings import Location, Violation, evidence
 from ..manifest import VrRef
 from ..model import Variable
+from .model_analysis import analyse
 
 SETTABLE_VARIABILITIES = ("fixed", "tunable")
 FALSE_VALUES = ("false", "0")
@@ -174,6 +176,8 @@ def enable_parameter_not_scalar(ctx: CheckContext) -> Iterator[Violation]:
     model = ctx.model
     if model is None:
         return
+    arrays = list(filter(attrgetter("dimensions"), model.variables)) \
+        if analyse(model).has_arrays else []
     for var in _resolved(ctx):
         if var.dimensions:
             yield Violation(
@@ -184,7 +188,7 @@ def enable_parameter_not_scalar(ctx: CheckContext) -> Iterator[Violation]:
             continue
         if var.vr is None:
             continue
-        users = [(v, d) for v in model.variables for d in v.dimensions if d.vr == var.vr]
+        users = [(v, d) for v in arrays for d in v.dimensions if d.vr == var.vr]
         if users:
             user, dim = users[0]
             yield Violation(

@@ -11,7 +11,9 @@ from __future__ import annotations
 
 import logging
 from bisect import bisect_right
+from itertools import accumulate
 from math import prod
+from operator import attrgetter
 from typing import TYPE_CHECKING, Iterable, Iterator, Sequence
 
 from ..context import Check, CheckContext
@@ -19,6 +21,8 @@ from ..findings import Location, Violation, evidence
 from ..manifest import VrRef
 from ..model import ModelDescription, Variable
 from ..unknowns import Unknown
+from .listing import Resolution, resolution
+from .model_analysis import analyse
 
 if TYPE_CHECKING:
     from ..dulmage_mendelsohn import DulmageMendelsohn
@@ -43,14 +47,13 @@ def _size(var: Variable, model: ModelDescription) -> int | None:
 class _Elements:
     """Variables laid out element by element: variable i owns indices offsets[i]..offsets[i+1]-1."""
 
-    def __init__(self) -> None:
-        self.vars: list[Variable] = []
-        self.offsets: list[int] = [0]
+    def __init__(self, variables: Sequence[Variable], sizes: Sequence[int]) -> None:
+        self.vars = variables
+        self.offsets: list[int] = list(accumulate(sizes, initial=0))
 
-    def add(self, var: Variable, size: int) -> range:
-        self.vars.append(var)
-        self.offsets.append(self.offsets[-1] + size)
-        return range(self.offsets[-2], self.offsets[-1])
+    def ranges(self) -> Iterator[range]:
+        """The element indices of each variable, in order."""
+        return map(range, self.offsets, self.offsets[1:])
 
     def __len__(self) -> int:
         return self.offsets[-1]
@@ -115,16 +118,57 @@ def _explain(dm: DulmageMendelsohn, rows: _Elements, cols: _Elements, limit: int
     return "; ".join(parts)
 
 
-def _resolve(refs: Sequence[VrRef | Unknown], model: ModelDescription
-             ) -> list[tuple[VrRef | Unknown, Variable]] | None:
-    """The distinct variables of ``refs``; None when one does not resolve (reported elsewhere)."""
+def _resolve(listed: Resolution) -> tuple[Sequence[VrRef | Unknown], list[Variable]] | None:
+    """The first entry of each distinct variable of a list, and the variables; None when one
+    does not resolve (reported elsewhere)."""
+    if not listed.complete:
+        return None
+    if listed.distinct:
+        return listed.entries, listed.variables  # type: ignore[return-value]  # the usual case
     out: dict[int, tuple[VrRef | Unknown, Variable]] = {}
-    for ref in refs:
-        var = model.by_vr.get(ref.vr) if ref.vr is not None else None
-        if var is None:
-            return None
+    for ref, var in zip(listed.entries, listed.variables):
         out.setdefault(ref.vr, (ref, var))  # type: ignore[arg-type]
-    return list(out.values())
+    return [ref for ref, _ in out.values()], [var for _, var in out.values()]
+
+
+def _sizes(variables: Sequence[Variable], model: ModelDescription) -> list[int | None]:
+    """:func:`_size` of each variable."""
+    if not analyse(model).has_arrays:
+        return [1] * len(variables)  # all scalars, the usual case
+    return [_size(var, model) for var in variables]
+
+
+def _row_deps(res_refs: Sequence[Unknown], res_vars: Sequence[Variable],
+              row_sizes: Sequence[int | None], cols: _Elements, max_edges: int
+              ) -> list[list[int] | None] | None:
+    """The columns each residual element depends on (None: all); None when a size is unknown
+    or the graph has more than ``max_edges`` element edges (the check is then skipped)."""
+    alg_vrs = map(attrgetter("vr"), cols.vars)
+    if row_sizes.count(1) == len(row_sizes) and len(cols) == len(cols.vars):
+        # All scalars, the usual case: column i is algebraic variable i, and a residual's list
+        # is no longer than its dependencies attribute, so the edges are counted afterwards.
+        col = dict(zip(alg_vrs, range(len(cols))))
+        rows = [None if deps is None else [col[vr] for vr in deps if vr in col]
+                for deps in map(attrgetter("dependencies"), res_refs)]
+        if sum(map(len, filter(None, rows))) > max_edges:
+            log.warning("index-1 check skipped: more than %d element edges", max_edges)
+            return None
+        return rows
+    col_of = dict(zip(alg_vrs, cols.ranges()))
+    row_deps: list[list[int] | None] = []
+    edges = 0
+    for ref, var, size in zip(res_refs, res_vars, row_sizes):
+        if size is None:
+            log.info("index-1 check skipped: size of %s is not known", var.name)
+            return None
+        deps = ref.dependencies
+        mine = None if deps is None else [c for vr in deps if vr in col_of for c in col_of[vr]]
+        edges += size * (len(mine) if mine is not None else 0)
+        if edges > max_edges:
+            log.warning("index-1 check skipped: more than %d element edges", max_edges)
+            return None
+        row_deps.extend([mine] * size)
+    return row_deps
 
 
 def _greedy_matching_size(row_deps: Sequence[list[int] | None], n_cols: int) -> int:
@@ -153,34 +197,22 @@ def index1_structurally_singular(ctx: CheckContext, *, max_names: int, max_evide
     """The residual/algebraic-variable graph has a matching of size min(#residuals, #algebraic)."""
     model, manifest = ctx.model, ctx.manifest
     assert model is not None and manifest is not None
-    algebraic = _resolve(manifest.algebraic, model)
-    residuals = _resolve(manifest.residuals, model)
-    if algebraic is None or residuals is None or not algebraic or not residuals:
+    algebraic = _resolve(resolution(ctx, "algebraic"))
+    residuals = _resolve(resolution(ctx, "residuals"))
+    if algebraic is None or residuals is None or not algebraic[0] or not residuals[0]:
         return
-    cols = _Elements()
-    col_of: dict[int, range] = {}
-    for _, var in algebraic:
-        size = _size(var, model)
-        if size is None:
-            log.info("index-1 check skipped: size of %s is not known", var.name)
-            return
-        col_of[var.vr] = cols.add(var, size)  # type: ignore[index]
-    rows = _Elements()
-    row_deps: list[list[int] | None] = []
-    edges = 0
-    for ref, var in residuals:
-        size = _size(var, model)
-        if size is None:
-            log.info("index-1 check skipped: size of %s is not known", var.name)
-            return
-        deps = ref.dependencies  # type: ignore[union-attr]
-        mine = None if deps is None else [c for vr in deps if vr in col_of for c in col_of[vr]]
-        edges += size * (len(mine) if mine is not None else 0)
-        if edges > max_edges:
-            log.warning("index-1 check skipped: more than %d element edges", max_edges)
-            return
-        rows.add(var, size)
-        row_deps.extend([mine] * size)
+    (alg_refs, alg_vars), (res_refs, res_vars) = algebraic, residuals
+    col_sizes = _sizes(alg_vars, model)
+    if None in col_sizes:
+        log.info("index-1 check skipped: size of %s is not known",
+                 alg_vars[col_sizes.index(None)].name)
+        return
+    cols = _Elements(alg_vars, col_sizes)  # type: ignore[arg-type]
+    row_sizes = _sizes(res_vars, model)
+    row_deps = _row_deps(res_refs, res_vars, row_sizes, cols, max_edges)  # type: ignore[arg-type]
+    if row_deps is None:
+        return
+    rows = _Elements(res_vars, row_sizes)  # type: ignore[arg-type]
     needed = min(len(rows), len(cols))
     if _greedy_matching_size(row_deps, len(cols)) >= needed:
         return  # a matching of full size was found without the graph machinery
@@ -190,8 +222,8 @@ def index1_structurally_singular(ctx: CheckContext, *, max_names: int, max_evide
     dm = dulmage_mendelsohn(BipartitePattern.from_rows(row_deps, len(cols)))
     if dm.rank >= needed:
         return
-    yield _violation(dm, needed, rows, cols, [r for r, _ in residuals],
-                     [a for a, _ in algebraic], manifest.file, max_names, max_evidence)
+    yield _violation(dm, needed, rows, cols, res_refs, alg_refs, manifest.file, max_names,
+                     max_evidence)
 
 
 def _violation(dm: DulmageMendelsohn, needed: int, rows: _Elements, cols: _Elements,

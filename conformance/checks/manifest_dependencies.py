@@ -10,12 +10,14 @@ other rules skip it.
 from __future__ import annotations
 
 import logging
+from itertools import chain
+from operator import attrgetter
 from typing import Iterator
 
 from ..context import Check, CheckContext
 from ..drafts.detect import FORMULATION, LS_DAE_ROOT
 from ..findings import Location, Violation, evidence
-from ..model import ModelDescription, Variable
+from ..model import FLOAT_TYPES, ModelDescription, Variable
 from ..unknowns import Unknown
 from .dae_roles import DaeRoles, describe, roles_of
 
@@ -60,6 +62,10 @@ def dependency_unknown_vr(ctx: CheckContext) -> Iterator[Violation]:
     # Tokens that are not unsigned integers are left to the schema stage: fmi3Unknown types
     # dependencies as a list of xs:unsignedInt in every draft's schema.
     by_vr = model.by_vr
+    all_deps = chain.from_iterable(filter(None, map(attrgetter("dependencies"),
+                                                    manifest.structure)))
+    if all(map(by_vr.__contains__, all_deps)):
+        return  # the usual case: every dependency resolves, decided in C
     for u in manifest.structure:
         deps = u.dependencies
         if not deps or all(vr in by_vr for vr in deps):
@@ -100,19 +106,27 @@ def dependency_not_allowed_known(ctx: CheckContext) -> Iterator[Violation]:
     assert model is not None and manifest is not None
     roles = roles_of(ctx)
     verdicts: dict[tuple[str, int], bool] = {}  # (element kind, known) -> allowed; few distinct
-    # Per element kind, knowns already found allowed: most elements depend only on these, and
-    # a set test decides them without a loop. Algebraic variables are allowed for every kind,
-    # states for every kind but InitialUnknown (see _allowed).
-    allowed_knowns = {kind: set(roles.algebraic) if kind == "InitialUnknown"
-                      else set(roles.algebraic | roles.states) for kind in _CHECKED_KINDS}
+    # Knowns allowed for every kind (see _allowed): algebraic variables, and states for every
+    # kind but InitialUnknown. Most dependencies are these: a set test decides them, and when
+    # the few other knowns of each kind (gathered in C) are all allowed, nothing is reported.
+    algebraic_or_state = roles.algebraic | roles.states
+    usual = {kind: roles.algebraic if kind == "InitialUnknown" else algebraic_or_state
+             for kind in _CHECKED_KINDS}
+    others = {kind: set(chain.from_iterable(filter(None, map(
+        attrgetter("dependencies"), manifest.unknowns(kind))))).difference(usual[kind])
+        for kind in _CHECKED_KINDS}
+    if all((known := model.by_vr.get(vr)) is None or _allowed(kind, known, roles, ctx.draft)
+           for kind, vrs in others.items() for vr in vrs):
+        return
+    found_ok: dict[str, set[int]] = {kind: set() for kind in _CHECKED_KINDS}  # decided allowed
     for u in manifest.structure:
         if u.kind not in _CHECKED_KINDS:
             continue  # EventIndicator/ClockedState dependencies are for debugging (MS-12)
         deps = u.dependencies
-        if not deps:
+        if not deps or usual[u.kind].issuperset(deps):
             continue
-        known_ok = allowed_knowns[u.kind]
-        if known_ok.issuperset(deps):
+        known_ok = found_ok[u.kind]
+        if known_ok.issuperset(set(deps).difference(usual[u.kind])):
             continue
         for vr in dict.fromkeys(deps):
             key = (u.kind, vr)
@@ -120,7 +134,7 @@ def dependency_not_allowed_known(ctx: CheckContext) -> Iterator[Violation]:
             if ok is None:
                 known = model.by_vr.get(vr)
                 ok = verdicts[key] = known is None or _allowed(u.kind, known, roles, ctx.draft)
-                if ok:
+                if ok and vr not in usual[u.kind]:
                     known_ok.add(vr)
             if ok:
                 continue
@@ -141,14 +155,16 @@ def dependency_not_allowed_known(ctx: CheckContext) -> Iterator[Violation]:
 
 _ALWAYS_ALLOWED = frozenset({"dependent"})
 _KIND_SET = frozenset(KINDS)
+_INITIAL_SET = frozenset(INITIAL_KINDS)
 
 def dependencies_kind_length(ctx: CheckContext) -> Iterator[Violation]:
     """``dependenciesKind`` has one entry per ``dependencies`` entry (MS-30)."""
     model, manifest = ctx.model, ctx.manifest
     assert model is not None and manifest is not None
     for u in manifest.structure:
-        if u.dependencies_kind is None:
-            continue
+        kinds, deps = u.dependencies_kind, u.dependencies
+        if kinds is None or (deps is not None and len(deps) + len(u.bad_tokens) == len(kinds)):
+            continue  # the usual case
         name = unknown_name(u, model)
         if u.dependencies is None:
             yield Violation(
@@ -169,6 +185,14 @@ def dependencies_kind_invalid(ctx: CheckContext) -> Iterator[Violation]:
     """Each ``dependenciesKind`` value exists and is allowed for its unknown (MS-31)."""
     model, manifest = ctx.model, ctx.manifest
     assert model is not None and manifest is not None
+    # Only an element of a non-floating-point variable, or an InitialUnknown, can break a rule:
+    # when no element names such a variable and every InitialUnknown's kinds (few distinct
+    # tuples) are allowed, nothing is reported; decided in C.
+    non_float = {v.vr for v in model.variables if v.type not in FLOAT_TYPES}
+    initial_kinds = set(map(attrgetter("dependencies_kind"), manifest.unknowns("InitialUnknown")))
+    if non_float.isdisjoint(map(attrgetter("vr"), manifest.structure)) and all(
+            _KIND_SET.intersection(kinds) <= _INITIAL_SET for kinds in initial_kinds if kinds):
+        return
     for u in manifest.structure:
         if not u.dependencies_kind:
             continue

@@ -8,12 +8,15 @@ of its kind, and a Residual that names none by residual-unknown-vr.
 """
 from __future__ import annotations
 
-from typing import Iterator
+from collections.abc import Iterator, Sequence
+from operator import attrgetter
 
 from ..context import Check, CheckContext
 from ..findings import Location, Violation, evidence
+from ..model import ModelDescription
 from ..unknowns import Unknown
 from .dae_roles import describe, roles_of
+from .model_analysis import analyse
 
 
 def _unresolved(u: Unknown) -> Violation:
@@ -73,6 +76,8 @@ def state_derivative_mismatch(ctx: CheckContext) -> Iterator[Violation]:
     listed = manifest.unknowns("ContinuousStateDerivative")
     if not listed:
         return  # an absent list is inherited from modelDescription.xml (Q-02)
+    if _same_state_derivatives(model, listed):
+        return
     ours: dict[int, Unknown] = {}
     for u in listed:
         var = model.by_vr.get(u.vr) if u.vr is not None else None
@@ -87,7 +92,7 @@ def state_derivative_mismatch(ctx: CheckContext) -> Iterator[Violation]:
             continue
         ours.setdefault(var.vr, u)  # type: ignore[arg-type]
     theirs: dict[int, Unknown] = {}
-    for u in model.unknowns("ContinuousStateDerivative"):
+    for u in analyse(model).unknowns("ContinuousStateDerivative"):
         if u.vr is not None and u.vr in model.by_vr:
             theirs.setdefault(u.vr, u)
     for vr, u in ours.items():
@@ -107,6 +112,18 @@ def state_derivative_mismatch(ctx: CheckContext) -> Iterator[Violation]:
                                   in_model_description=True), subject=model.by_vr[vr].name)
 
 
+def _same_state_derivatives(model: ModelDescription, listed: Sequence[Unknown]) -> bool:
+    """Whether :func:`state_derivative_mismatch` has nothing to say, decided in C for the usual
+    case: every listed one resolves and has a derivative attribute, and both documents list
+    the same variables."""
+    ours = list(map(attrgetter("vr"), listed))
+    variables = list(map(model.by_vr.get, ours))  # by_vr.get(None) is None
+    if not all(variables) or None in map(attrgetter("derivative"), variables):
+        return False
+    theirs = map(attrgetter("vr"), analyse(model).unknowns("ContinuousStateDerivative"))
+    return set(ours) == set(filter(model.by_vr.__contains__, theirs))
+
+
 # --- output-set-mismatch ---------------------------------------------------------------------
 
 def output_set_mismatch(ctx: CheckContext) -> Iterator[Violation]:
@@ -116,7 +133,7 @@ def output_set_mismatch(ctx: CheckContext) -> Iterator[Violation]:
     listed = manifest.unknowns("Output")
     if not listed:
         return  # an absent Output list is inherited from modelDescription.xml (Q-02)
-    outputs = {v.vr: v for v in model.variables if v.causality == "output" and v.vr is not None}
+    outputs = {v.vr: v for v in analyse(model).by_causality["output"] if v.vr is not None}
     roles = roles_of(ctx)
     seen = set()
     for u in listed:

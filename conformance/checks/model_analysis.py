@@ -9,11 +9,12 @@ per model with dicts and sets, so a model with 100,000 variables costs milliseco
 from __future__ import annotations
 
 import weakref
+from operator import attrgetter
 from typing import Optional
 
 from ..context import CheckContext
 from ..findings import Location
-from ..model import FLOAT_TYPES, ModelDescription, Variable
+from ..model import FLOAT_TYPES, ModelDescription, Variable, VariableDetails
 from ..unknowns import Unknown
 
 CAUSALITIES = frozenset({"structuralParameter", "parameter", "calculatedParameter", "input",
@@ -139,23 +140,36 @@ class _Analysis:
         self.derivatives: list[Variable] = []             # variables with a derivative attribute
         self.by_causality: dict[str, list[Variable]] = {"output": [], "calculatedParameter": []}
         self.clocked_vrs: set[int] = set()                # clocked variables and Clocks (MS-05 d)
+        # The distinct sets of rarely given attributes (nominal, min, max, clocks, unit, ...):
+        # the reader shares one VariableDetails among variables with the same ones, so a model
+        # holds few, and a rule on those attributes decides a clean model from these alone.
+        self.details: set[VariableDetails] = set(map(attrgetter("details"), model.variables))
+        self.has_arrays = any(d.dimensions for d in self.details)  # a variable has <Dimension>
         memo: dict[tuple, Verdict] = {}
-        for var in model.variables:
+        # One loop with few attribute reads per variable: it runs 500k times in a large model.
+        outputs, calculated = self.by_causality["output"], self.by_causality["calculatedParameter"]
+        variables = model.variables
+        any_clocks = any(d.clocks is not None for d in self.details)
+        for var in variables:
+            causality = var.causality
             if var.derivative is not None:
                 self.derivatives.append(var)
-            if var.causality in self.by_causality:
-                self.by_causality[var.causality].append(var)
-            if (var.clocks is not None or var.type == "Clock") and var.vr is not None:
-                self.clocked_vrs.add(var.vr)
-            key = (var.type, var.causality, var.variability, var.declared_initial, var.initial,
-                   var.clocks is not None, var.start is not None)
+            if causality == "output":
+                outputs.append(var)
+            elif causality == "calculatedParameter":
+                calculated.append(var)
+            elif causality == "independent":
+                self.independents.append(var)
+            clocked = any_clocks and var.clocks is not None
+            key = (var.type, causality, var.variability, var.declared_initial, var.initial,
+                   clocked, var.start is not None)
             verdict = memo.get(key)
             if verdict is None:
                 verdict = memo[key] = _verdict(*key)
             if verdict is not _CLEAN:
                 self.verdicts.append((var, verdict))
-            if var.causality == "independent":
-                self.independents.append(var)
+            if (clocked or key[0] == "Clock") and var.vr is not None:
+                self.clocked_vrs.add(var.vr)
         for u in model.structure:
             self.by_kind.setdefault(u.kind, []).append(u)
 

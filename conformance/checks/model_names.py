@@ -21,6 +21,7 @@ from ..context import Check, CheckContext
 from ..findings import Location, Violation, evidence
 from ..model import ModelDescription, Variable
 from ..structured_names import all_structured, is_structured_name, name_problem
+from .model_analysis import analyse
 
 _FORBIDDEN = {"\r": "carriage return (U+000D)", "\n": "line feed (U+000A)",
               "\t": "tab (U+0009)"}
@@ -39,7 +40,8 @@ def _all_names(ctx: CheckContext) -> list[str]:
         assert ctx.model is not None
         variables = ctx.model.variables
         names = [var.name for var in variables]
-        names.extend(alias for var in filter(_ALIASES, variables) for alias in var.aliases)
+        if any(d.aliases for d in analyse(ctx.model).details):  # few distinct: no pass if none
+            names.extend(alias for var in filter(_ALIASES, variables) for alias in var.aliases)
         return names
     return ctx.memo("model_names.names", compute)
 

@@ -20,7 +20,7 @@ from operator import attrgetter
 from ..context import Check, CheckContext
 from ..findings import Location, Violation, evidence
 from ..model import Dimension, ModelDescription, Variable
-from .model_analysis import enable_vrs, unknown_loc, var_loc
+from .model_analysis import analyse, enable_vrs, unknown_loc, var_loc
 
 
 def _uint(text: str) -> int | None:
@@ -105,7 +105,7 @@ def _dimension_fault(model: ModelDescription, dim: Dimension, enable: frozenset[
 def dimension_invalid(ctx: CheckContext) -> Iterator[Violation]:
     """DAE536 MV-41: each <Dimension> gives a positive initial size, by start or by a UInt64
     constant or structural parameter."""
-    if (model := ctx.model) is None:
+    if (model := ctx.model) is None or not analyse(model).has_arrays:
         return
     enable = enable_vrs(ctx)
     for var in filter(attrgetter("dimensions"), model.variables):
@@ -128,8 +128,8 @@ def dimension_invalid(ctx: CheckContext) -> Iterator[Violation]:
 
 def clocks_invalid(ctx: CheckContext) -> Iterator[Violation]:
     """DAE537 MV-03, MV-51: every entry of ``clocks`` names a Clock variable."""
-    if (model := ctx.model) is None:
-        return
+    if (model := ctx.model) is None or not any(d.clocks for d in analyse(model).details):
+        return  # no variable has a clocks attribute: decided from the model's distinct details
     by_vr = model.by_vr
     for var in filter(attrgetter("clocks"), model.variables):
         for token in var.clocks.split():

@@ -9,6 +9,9 @@ references are reported only by ``model-structure-unknown-vr``; the other rules 
 from __future__ import annotations
 
 from collections.abc import Iterator
+from functools import partial
+from itertools import chain
+from operator import attrgetter, is_not, itemgetter
 
 from ..context import Check, CheckContext
 from ..findings import Location, Violation, evidence
@@ -27,7 +30,12 @@ def model_structure_unknown_vr(ctx: CheckContext) -> Iterator[Violation]:
     if (model := ctx.model) is None:
         return
     by_vr = model.by_vr
-    for u in model.structure:
+    structure = model.structure
+    if all(map(by_vr.__contains__, filter(_given, map(attrgetter("vr"), structure)))) and all(
+            map(by_vr.__contains__, chain.from_iterable(filter(None, map(
+                attrgetter("dependencies"), structure))))):
+        return  # the usual case: everything resolves, decided in C
+    for u in structure:
         if u.vr is not None and u.vr not in by_vr:
             yield Violation(
                 "ModelStructure element naming a valueReference that no variable has: "
@@ -41,6 +49,9 @@ def model_structure_unknown_vr(ctx: CheckContext) -> Iterator[Violation]:
                 "ModelStructure element of {subject}; list only existing variables",
                 unknown_loc(u), evidence(kind=u.kind, missing=sorted(set(missing))),
                 subject=_unknown_subject(model, u))
+
+
+_given = partial(is_not, None)  # a value reference that is not None (a test in C)
 
 
 def _listed(model: ModelDescription, kind: str) -> Iterator[tuple[Unknown, Variable]]:
@@ -57,6 +68,12 @@ def _set_mismatch(model: ModelDescription, kind: str, expected: dict[int, str],
                   ) -> Iterator[Violation]:
     """Compare a ModelStructure list with the set it must equal; yield extra/duplicate/missing."""
     not_member, duplicate, missing = messages
+    unknowns = analyse(model).unknowns(kind)
+    vrs = list(filter(model.by_vr.__contains__, map(attrgetter("vr"), unknowns)))
+    listed = set(vrs)
+    if (len(listed) == len(vrs) and listed.issuperset(expected)
+            and listed.difference(expected) <= allowed_extra):
+        return  # the usual case: each listed once, all expected, decided in C
     seen: set[int] = set()
     for u, var in _listed(model, kind):
         vr = var.vr
@@ -134,6 +151,10 @@ def model_structure_derivative_missing(ctx: CheckContext) -> Iterator[Violation]
             subject=var.name)
 
 
+_REASONS = {initial: (f"derivative with initial={initial}", f"state with initial={initial}")
+            for initial in ("approx", "calculated")}
+
+
 def model_structure_initial_unknown_mismatch(ctx: CheckContext) -> Iterator[Violation]:
     """DAE513 MS-05: InitialUnknown = (a) outputs, (b) calculatedParameters, (c) states/derivatives
     whose initial is approx or calculated; (d) clocked variables may be added."""
@@ -149,11 +170,13 @@ def model_structure_initial_unknown_mismatch(ctx: CheckContext) -> Iterator[Viol
     for var in analysis.by_causality["calculatedParameter"]:
         if var.vr is not None and by_vr[var.vr] is var:
             expected[var.vr] = "calculatedParameter"
-    for u, der in _listed(model, "ContinuousStateDerivative"):
-        state = by_vr.get(der.derivative) if der.derivative is not None else None
-        for var, role in ((der, "derivative"), (state, "state")):
-            if var is not None and var.vr is not None and var.initial in ("approx", "calculated"):
-                expected.setdefault(var.vr, f"{role} with initial={var.initial}")
+    ders = list(map(itemgetter(1), _listed(model, "ContinuousStateDerivative")))
+    for der, state in zip(ders, map(by_vr.get, map(attrgetter("derivative"), ders))):
+        # by_vr.get(None) is None; the reasons are formatted once per (role, initial)
+        if der.initial in _REASONS and der.vr is not None:
+            expected.setdefault(der.vr, _REASONS[der.initial][0])
+        if state is not None and state.initial in _REASONS and state.vr is not None:
+            expected.setdefault(state.vr, _REASONS[state.initial][1])
     yield from _set_mismatch(model, "InitialUnknown", expected, analysis.clocked_vrs, (
         "<InitialUnknown> naming neither an output, calculated parameter, state or state "
         "derivative with initial approx or calculated, nor a clocked variable: {subject}; "

@@ -16,14 +16,12 @@ that carry one of the three attributes (usually none, or a few) are looked at ag
 from __future__ import annotations
 
 from collections.abc import Iterator
-from itertools import repeat
-from operator import attrgetter, is_not
 
 from ..context import Check, CheckContext
 from ..definitions import TypeDefinition, UnitDefinition
 from ..findings import Location, Violation, evidence
 from ..model import ModelDescription, Variable
-from .model_analysis import var_loc
+from .model_analysis import analyse, var_loc
 
 _SHOWN = 8  # defined names listed in the evidence
 _ON_VARIABLE = "{subject}"
@@ -35,13 +33,11 @@ def _typed(ctx: CheckContext) -> list[Variable]:
     """The variables with a declaredType, unit, displayUnit or alias displayUnit (memoised)."""
     def compute() -> list[Variable]:
         assert ctx.model is not None
-        variables = ctx.model.variables
-        # Decided in C when no variable carries any of them, as in most models.
-        if not any(any(map(is_not, map(attrgetter(f), variables), repeat(None)))
-                   for f in ("declared_type", "unit", "display_unit")) \
-                and not any(map(attrgetter("alias_display_units"), variables)):
-            return []
-        return [v for v in variables
+        if not any(d.declared_type is not None or d.unit is not None
+                   or d.display_unit is not None or d.alias_display_units
+                   for d in analyse(ctx.model).details):
+            return []  # the usual case: decided from the model's few distinct details
+        return [v for v in ctx.model.variables
                 if v.declared_type is not None or v.unit is not None
                 or v.display_unit is not None or v.alias_display_units]
     return ctx.memo("model_types.typed", compute)

@@ -14,11 +14,12 @@ by ``model-structure-unknown-vr``.
 """
 from __future__ import annotations
 
+from operator import attrgetter
 from typing import Iterator
 
 from ..context import Check, CheckContext
 from ..findings import Location, Violation, evidence
-from ..model import Variable
+from ..model import FLOAT_TYPES, ModelDescription, Variable
 from ..unknowns import Unknown
 from .model_analysis import (
     ALLOWED_VARIABILITY,
@@ -47,9 +48,10 @@ def value_reference_duplicate(ctx: CheckContext) -> Iterator[Violation]:
     """DAE502 MV-01: no two variables share a valueReference."""
     if (model := ctx.model) is None:
         return
-    with_vr = [var for var in model.variables if var.vr is not None]
-    if len(with_vr) == len(model.by_vr):
+    vrs = list(map(attrgetter("vr"), model.variables))
+    if len(vrs) - vrs.count(None) == len(model.by_vr):
         return  # the usual case: the index kept every variable
+    with_vr = [var for var in model.variables if var.vr is not None]
     first: dict[int, Variable] = {}
     for var in with_vr:
         owner = first.setdefault(var.vr, var)  # type: ignore[arg-type]
@@ -76,9 +78,8 @@ def variable_name_duplicate(ctx: CheckContext) -> Iterator[Violation]:
     if (model := ctx.model) is None:
         return
     names = [var.name for var in model.variables]
-    aliased = [var for var in model.variables if getattr(var, "aliases", None)]
-    if not aliased and len(set(names)) == len(names):
-        return  # the usual case
+    if not any(map(attrgetter("aliases"), model.variables)) and len(set(names)) == len(names):
+        return  # the usual case, decided in C
     seen: dict[str, str] = {}   # name -> the variable that first used it
     for var in model.variables:
         entries = [(var.name, var.line, False)] if var.name else []
@@ -219,8 +220,11 @@ def derivative_invalid(ctx: CheckContext) -> Iterator[Violation]:
     if (model := ctx.model) is None:
         return
     by_vr = model.by_vr
-    for var in analyse(model).derivatives:
-        target = by_vr.get(var.derivative)  # type: ignore[arg-type]
+    derivatives = analyse(model).derivatives
+    targets = list(map(by_vr.get, map(attrgetter("derivative"), derivatives)))
+    if all(targets) and FLOAT_TYPES.issuperset(map(attrgetter("type"), targets)):
+        derivatives = []  # the usual case: every target exists and is a float, decided in C
+    for var, target in zip(derivatives, targets):
         if target is None:
             yield Violation(
                 "derivative attribute naming a valueReference that no variable has, on "
@@ -233,6 +237,8 @@ def derivative_invalid(ctx: CheckContext) -> Iterator[Violation]:
                 var_loc(model, var),
                 evidence(derivative=var.derivative, target=target.name, target_type=target.type),
                 subject=var.name)
+    if _derivatives_listed_well(model):
+        return
     states: dict[int, tuple[Unknown, Variable]] = {}  # state vr -> first CSD naming it
     for u in analyse(model).unknowns("ContinuousStateDerivative"):
         der = by_vr.get(u.vr) if u.vr is not None else None
@@ -268,6 +274,18 @@ def derivative_invalid(ctx: CheckContext) -> Iterator[Violation]:
                 evidence(state=state.name, earlier_derivative=earlier.name,
                          earlier_line=earlier_u.line, value_reference=der.vr),
                 subject=der.name)
+
+
+def _derivatives_listed_well(model: ModelDescription) -> bool:
+    """Whether :func:`derivative_invalid`'s ContinuousStateDerivative loop has nothing to say
+    (in C): each names a distinct existing float state, and both are continuous."""
+    listed = analyse(model).unknowns("ContinuousStateDerivative")
+    ders = list(filter(None, map(model.by_vr.get, map(attrgetter("vr"), listed))))
+    state_vrs = list(map(attrgetter("derivative"), ders))
+    states = list(map(model.by_vr.get, state_vrs))  # by_vr.get(None) is None
+    return (all(states) and len(set(state_vrs)) == len(state_vrs)
+            and FLOAT_TYPES.issuperset(map(attrgetter("type"), states))
+            and set(map(attrgetter("variability"), ders + states)) <= {"continuous"})
 
 
 CHECKS: dict[str, Check] = {

@@ -15,16 +15,27 @@ Legacy ``<Residual><Formulation/>...</Residual>`` elements arrive here as one Re
 from __future__ import annotations
 
 import logging
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator, Sequence
+from itertools import repeat
+from operator import attrgetter, is_not
 
 from ..context import Check, CheckContext
 from ..findings import Location, Violation, evidence
-from ..manifest import VrRef
-from ..model import Variable
+from ..model import FLOAT_TYPES, Variable
 from ..unknowns import Unknown
-from .algebraic import element_count, resolved_vrs, states_of
+from .algebraic import element_count, states_of
 from .dae_form import fully_implicit
-from .listing import classified, facts, first_listings, repeats
+from .listing import (
+    Listing,
+    Problems,
+    classified,
+    facts,
+    first_listings,
+    repeats,
+    resolution,
+    resolved_vrs,
+)
+from .model_analysis import analyse
 
 log = logging.getLogger(__name__)
 
@@ -37,13 +48,32 @@ NOT_FLOAT_CONTINUOUS = "not-float-continuous"
 STATE_OR_INPUT = "state-derivative-or-input"
 
 
+def _class_problem(type_: str, variability: str, causality: str) -> str | None:
+    """The first reason a variable of this type, variability and causality cannot be a
+    residual, before its role is known, or None."""
+    if type_ not in FLOAT_TYPES or variability != "continuous":
+        return NOT_FLOAT_CONTINUOUS
+    return STATE_OR_INPUT if causality in SET_BY_IMPORTER else None
+
+
 def residual_problem(var: Variable, *, states: frozenset[int]) -> str | None:
     """The first reason ``var`` cannot be a residual, or None if it can."""
-    if not var.is_float or var.variability != "continuous":
-        return NOT_FLOAT_CONTINUOUS
-    if var.vr in states or var.derivative is not None or var.causality in SET_BY_IMPORTER:
+    problem = _class_problem(var.type, var.variability, var.causality)
+    if problem is None and (var.vr in states or var.derivative is not None):
         return STATE_OR_INPUT
-    return None
+    return problem
+
+
+def _problems(variables: Sequence[Variable], states: frozenset[int]
+              ) -> list[str | None] | None:
+    """:func:`residual_problem` of each variable, or None when none has one: decided per
+    distinct (type, variability, causality) and by set tests, in C, for the usual clean list."""
+    classes = set(map(attrgetter("type", "variability", "causality"), variables))
+    if (not any(_class_problem(*c) for c in classes)
+            and states.isdisjoint(map(attrgetter("vr"), variables))
+            and not any(map(is_not, map(attrgetter("derivative"), variables), repeat(None)))):
+        return None
+    return [residual_problem(v, states=states) for v in variables]
 
 
 def _classified(ctx: CheckContext, wanted: str) -> Iterator[tuple[Unknown, Variable]]:
@@ -51,14 +81,17 @@ def _classified(ctx: CheckContext, wanted: str) -> Iterator[tuple[Unknown, Varia
     if model is None or manifest is None:
         return
 
-    def listed() -> Iterator[tuple[Unknown, Variable]]:
-        algebraic = resolved_vrs(model, manifest.algebraic)  # those the algebraic rules explain
-        return ((res, var) for res, var in first_listings(manifest.residuals, model)
-                if res.vr not in algebraic)
+    def listed() -> Listing:
+        algebraic = resolved_vrs(resolution(ctx, "algebraic"))  # the algebraic rules' to explain
+        entries, variables = first_listings(resolution(ctx, "residuals"))
+        if algebraic.isdisjoint(map(attrgetter("vr"), entries)):
+            return entries, variables  # the usual case, decided in C
+        kept = [(res, var) for res, var in zip(entries, variables) if res.vr not in algebraic]
+        return [res for res, _ in kept], [var for _, var in kept]
 
-    def classifier() -> Callable[[Variable], str | None]:
+    def classifier() -> Problems:
         states = states_of(ctx)
-        return lambda var: residual_problem(var, states=states)
+        return lambda variables: _problems(variables, states)
 
     yield from classified(ctx, "residual-classes", wanted, listed, classifier)
 
@@ -89,7 +122,7 @@ def residual_duplicate(ctx: CheckContext) -> Iterator[Violation]:
     """DAE-31: no two Residual elements name the same variable."""
     if ctx.model is None or ctx.manifest is None:
         return
-    for res, first, var in repeats(ctx.manifest.residuals, ctx.model):
+    for res, first, var in repeats(resolution(ctx, "residuals")):
         yield Violation(
             "residual {subject} is listed in more than one Residual element; list each "
             "residual once",
@@ -128,25 +161,27 @@ def residual_count_mismatch(ctx: CheckContext) -> Iterator[Violation]:
         return
     model, manifest = ctx.model, ctx.manifest
     sides = []
-    refs: tuple[VrRef, ...] | tuple[Unknown, ...]
-    for refs in (manifest.algebraic, manifest.residuals):
-        variables: dict[int, Variable] = {}
-        for ref in refs:
-            if ref.vr is None or ref.vr not in model.by_vr or ref.vr in variables:
-                # An unresolved entry has no size, and with a repeat it is unclear whether an
-                # entry is extra or stands for a missing one: the unknown-vr and duplicate
-                # rules explain those, and the count is judged once they are fixed.
-                return
-            variables[ref.vr] = model.by_vr[ref.vr]
-        sizes = [element_count(model, v) for v in variables.values()]
+    for name in ("algebraic", "residuals"):
+        listed = resolution(ctx, name)
+        variables = listed.variables
+        if not (listed.complete and listed.distinct):
+            # An unresolved entry has no size, and with a repeat it is unclear whether an
+            # entry is extra or stands for a missing one: the unknown-vr and duplicate
+            # rules explain those, and the count is judged once they are fixed.
+            return
+        if not analyse(model).has_arrays:
+            sides.append((len(variables), variables))  # all scalars, the usual case
+            continue
+        sizes = [element_count(model, v) for v in variables]
         known = [s for s in sizes if s is not None]
         if len(known) != len(sizes):
             log.debug("residual-count-mismatch skipped: an array size is not known statically")
             return
-        sides.append((sum(known), [v.name for v in variables.values()]))
-    (n_alg, alg_names), (n_res, res_names) = sides
+        sides.append((sum(known), variables))
+    (n_alg, alg_vars), (n_res, res_vars) = sides
     if n_alg == n_res or fully_implicit(model, manifest) is not None:
         return  # the fully implicit form is fully-implicit-form's finding
+    alg_names, res_names = [v.name for v in alg_vars], [v.name for v in res_vars]
     if manifest.algebraic_line is not None:
         where = Location(file=manifest.file, line=manifest.algebraic_line,
                          path=f"/{manifest.root_name}/AlgebraicVariables")

@@ -5,7 +5,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from conformance.structured_names import is_structured_name, name_problem
+from conformance.structured_names import all_structured, is_structured_name, name_problem
 
 # The examples the standard gives, plus one of each construct.
 LEGAL = [
@@ -77,3 +77,20 @@ def test_long_illegal_names_are_decided(name):
     # A regular expression that backtracked exponentially would hang here.
     assert not is_structured_name(name)
     assert name_problem(name) is not None
+
+
+@settings(max_examples=500, derandomize=True, deadline=None)
+@given(st.lists(st.one_of(_TEXT, _NAME), max_size=6))
+def test_all_structured_agrees_with_each_name(names):
+    # all_structured matches each shape once (digits written as 0, names joined by NUL)
+    assert all_structured(names) == all(map(is_structured_name, names))
+    assert all_structured(iter(names)) == all(map(is_structured_name, names))
+
+
+@pytest.mark.parametrize("names, legal", [
+    ([], True), (["a1", "b22", "c[3,44]"], True), (["a1", "1a"], False),
+    (["x[1]", "x[01]", "der(x[9],7)"], True), (["a", "b\x00c"], False), (["a\x00b"], False),
+    (["'2nd'", "'9'"], True), (["a[1]", "a[1x]"], False), ([""], False),
+])
+def test_all_structured_examples(names, legal):
+    assert all_structured(names) is legal

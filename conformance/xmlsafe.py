@@ -10,7 +10,7 @@ of these pseudo-rules
   external DTD. Other importers would expand or fetch what lsdae ignores, so the content cannot be
   trusted and no tree is returned.
 - ``xml-encoding``: the document is not UTF-8 (FMI requires UTF-8), or, on request, its XML
-  declaration does not state the encoding (AR-04).
+  declaration does not state the encoding (AR-04); :mod:`conformance.xml_encoding` tells.
 """
 from __future__ import annotations
 
@@ -23,12 +23,12 @@ from lxml import etree
 
 from conformance.drafts.detect import LS_NAMESPACE
 from conformance.findings import Location, Violation, evidence
+from conformance.xml_encoding import ENCODING, encoding_violations
 
 log = logging.getLogger(__name__)
 
 NOT_WELL_FORMED = "xml-not-well-formed"
 UNSAFE_CONSTRUCT = "xml-unsafe-construct"
-ENCODING = "xml-encoding"
 
 # Namespaces we can suggest when a document uses the prefix without declaring it.
 KNOWN_PREFIXES = {
@@ -38,22 +38,12 @@ KNOWN_PREFIXES = {
 }
 
 _UNDEFINED_PREFIX = re.compile(r"Namespace prefix (\S+?) (?:for (\S+) )?on (\S+) is not defined")
-_DECLARATION = re.compile(rb"^<\?xml\s[^>]*?\?>")
 # The root element's name: the first "<" that opens an element (not <?, <!, a comment).
 _ROOT_START = re.compile(rb"<(?![?!])[A-Za-z_][\w.:-]*")
-_DECLARED_ENCODING = re.compile(rb"""\sencoding\s*=\s*["']([A-Za-z0-9._:-]*)["']""")
-_UTF8_NAMES = {"utf-8", "utf8"}
 # libxml2 error types that mean "entity handling stopped the parse", not a syntax slip.
 _ENTITY_ERRORS = ("RESOURCE_LIMIT", "ENTITY", "AMPLIFICATION", "LOOP")
 # Limits that hold without XML_PARSE_HUGE: 10 MB text nodes, depth 256, 50000-character names.
 _LIMIT_ERRORS = ("ERR_RESOURCE_LIMIT", "ERR_NAME_TOO_LONG")
-_BOMS = (
-    (b"\xef\xbb\xbf", "UTF-8"),
-    (b"\xff\xfe\x00\x00", "UTF-32"),
-    (b"\x00\x00\xfe\xff", "UTF-32"),
-    (b"\xff\xfe", "UTF-16"),
-    (b"\xfe\xff", "UTF-16"),
-)
 
 
 def make_parser() -> etree.XMLParser:
@@ -102,7 +92,7 @@ def _parse(
         msg = "is empty" if not data else "contains only white space"
         return None, [Violation(f"{msg}; a well-formed document has a root element", where,
                                 rule=NOT_WELL_FORMED)]
-    violations = _encoding_violations(data, where, require_declaration=require_declaration)
+    violations = encoding_violations(data, where, require_declaration=require_declaration)
     parser = make_parser()
     root = None
     failure = ""
@@ -222,47 +212,6 @@ def _syntax_violation(err: etree._LogEntry, file: str, *, further: int) -> Viola
                    "a Latin-1 file without an encoding declaration looks like this)")
         return Violation(message, where, evidence(ev), rule=NOT_WELL_FORMED)
     return Violation(f"is not well-formed XML: {text}", where, evidence(ev), rule=NOT_WELL_FORMED)
-
-
-def _encoding_violations(data: bytes, where: Location, *,
-                         require_declaration: bool) -> list[Violation]:
-    """Report a byte-order mark or declaration naming anything but UTF-8."""
-    for bom, name in _BOMS:
-        if data.startswith(bom):
-            if name != "UTF-8":
-                return [Violation(f"is encoded as {name} (byte-order mark); FMI requires UTF-8",
-                                  where, evidence(encoding=name), rule=ENCODING)]
-            data = data[len(bom):]
-            break
-    else:
-        sniffed = _sniff_wide(data)
-        if sniffed:
-            return [Violation(f"is encoded as {sniffed}; FMI requires UTF-8", where,
-                              evidence(encoding=sniffed), rule=ENCODING)]
-    declaration = _DECLARATION.match(data[:1024])
-    declared = _DECLARED_ENCODING.search(declaration.group(0)) if declaration else None
-    if declared:
-        name = declared.group(1).decode("ascii", "replace")
-        if name.lower() not in _UTF8_NAMES:
-            return [Violation(f'declares encoding="{name}"; FMI requires UTF-8', where,
-                              evidence(encoding=name), rule=ENCODING)]
-        return []
-    if require_declaration:
-        what = ("has an XML declaration without encoding" if declaration
-                else "has no XML declaration")
-        return [Violation(f'{what}; FMI asks for <?xml version="1.0" encoding="UTF-8"?> on the '
-                          "first line", Location(file=where.file, line=1), rule=ENCODING)]
-    return []
-
-
-def _sniff_wide(data: bytes) -> str | None:
-    """UTF-16/32 without a byte-order mark, recognised by the NUL bytes around '<'."""
-    head = data[:4]
-    if head in (b"<\x00\x00\x00", b"\x00\x00\x00<"):
-        return "UTF-32"
-    if head[:2] in (b"<\x00", b"\x00<"):
-        return "UTF-16"
-    return None
 
 
 def _clip(text: str | None, limit: int = 200) -> str:

@@ -189,3 +189,15 @@ def analyse(model: ModelDescription) -> _Analysis:
     analysis = _Analysis(model)
     _last = (weakref.ref(model), analysis)
     return analysis
+
+
+def derivatives_listed_well(model: ModelDescription) -> bool:
+    """Whether :func:`.model_variables.derivative_invalid`'s ContinuousStateDerivative loop has
+    nothing to say (in C): each names a distinct existing float state, and both are continuous."""
+    listed = analyse(model).unknowns("ContinuousStateDerivative")
+    ders = list(filter(None, map(model.by_vr.get, map(attrgetter("vr"), listed))))
+    state_vrs = list(map(attrgetter("derivative"), ders))
+    states = list(map(model.by_vr.get, state_vrs))  # by_vr.get(None) is None
+    return (all(states) and len(set(state_vrs)) == len(state_vrs)
+            and FLOAT_TYPES.issuperset(map(attrgetter("type"), states))
+            and set(map(attrgetter("variability"), ders + states)) <= {"continuous"})

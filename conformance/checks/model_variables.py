@@ -19,12 +19,13 @@ from typing import Iterator
 
 from ..context import Check, CheckContext
 from ..findings import Location, Violation, evidence
-from ..model import FLOAT_TYPES, ModelDescription, Variable
+from ..model import FLOAT_TYPES, Variable
 from ..unknowns import Unknown
 from .model_analysis import (
     ALLOWED_VARIABILITY,
     allowed_initial,
     analyse,
+    derivatives_listed_well,
     enable_vrs,
     unknown_loc,
     var_loc,
@@ -237,7 +238,7 @@ def derivative_invalid(ctx: CheckContext) -> Iterator[Violation]:
                 var_loc(model, var),
                 evidence(derivative=var.derivative, target=target.name, target_type=target.type),
                 subject=var.name)
-    if _derivatives_listed_well(model):
+    if derivatives_listed_well(model):
         return
     states: dict[int, tuple[Unknown, Variable]] = {}  # state vr -> first CSD naming it
     for u in analyse(model).unknowns("ContinuousStateDerivative"):
@@ -274,18 +275,6 @@ def derivative_invalid(ctx: CheckContext) -> Iterator[Violation]:
                 evidence(state=state.name, earlier_derivative=earlier.name,
                          earlier_line=earlier_u.line, value_reference=der.vr),
                 subject=der.name)
-
-
-def _derivatives_listed_well(model: ModelDescription) -> bool:
-    """Whether :func:`derivative_invalid`'s ContinuousStateDerivative loop has nothing to say
-    (in C): each names a distinct existing float state, and both are continuous."""
-    listed = analyse(model).unknowns("ContinuousStateDerivative")
-    ders = list(filter(None, map(model.by_vr.get, map(attrgetter("vr"), listed))))
-    state_vrs = list(map(attrgetter("derivative"), ders))
-    states = list(map(model.by_vr.get, state_vrs))  # by_vr.get(None) is None
-    return (all(states) and len(set(state_vrs)) == len(state_vrs)
-            and FLOAT_TYPES.issuperset(map(attrgetter("type"), states))
-            and set(map(attrgetter("variability"), ders + states)) <= {"continuous"})
 
 
 CHECKS: dict[str, Check] = {

@@ -1,6 +1,7 @@
 """The Initialization-Mode survey read by the InitialUnknown probes (initial_unknowns.py).
 
-The rows, columns and declared sparsity come from :mod:`.initial_layout`.
+The rows, columns and declared sparsity come from :mod:`.initial_layout`; the fresh instances
+and their budget from :mod:`.initial_instances`.
 
 **Points.** The XML start values at the default start time, then seeded perturbations of
 :func:`conformance.probes.sampling.near_points` (``STEP`` times each known's nominal scale,
@@ -19,8 +20,6 @@ The survey is measured once per FMU and kept in ``ctx.facts``.
 """
 from __future__ import annotations
 
-import time
-from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -31,6 +30,13 @@ from ..numerics import colouring as col
 from ..numerics import measure, numdiff
 from ..runtime.layout import Layout
 from .api import FmiError, Point, ProbeContext, ProbeSkipped
+from .initial_instances import (
+    Factory,
+    InitialPoint,
+    InstanceCounter,
+    OverBudget,
+    SurveySettings,
+)
 from .initial_layout import build_initial_layout, start_time
 from .jacobian import PointSurvey, Settings, Survey
 from .jacobian_layout import JacobianLayout
@@ -41,15 +47,6 @@ SETTINGS_FACT = "initial.settings"
 OWNER = "initial-dependency-undeclared"   # the rule whose options set the survey
 SEED_SALT = 750
 MEASURING = Settings()                    # how to measure: as in Continuous-Time Mode
-
-
-@dataclass(frozen=True)
-class SurveySettings:
-    """The survey's options (those of ``initial-dependency-undeclared``)."""
-
-    points: int           # sampling points, the start values included
-    max_instances: int    # fresh instances over all points
-    max_seconds: float    # wall-clock time over all points
 
 
 @dataclass
@@ -103,71 +100,6 @@ def surveyed(ctx: ProbeContext, *, min_points: int = 1) -> InitialSurvey:
     return s
 
 
-class _OverBudget(Exception):
-    pass
-
-
-class _Counter:
-    """Fresh instances and seconds left; :meth:`spend` raises _OverBudget past either."""
-
-    def __init__(self, settings: SurveySettings):
-        self.settings = settings
-        self.left, self.used = settings.max_instances, 0
-        self.deadline = time.monotonic() + settings.max_seconds
-        self.why = ""
-
-    def spend(self) -> None:
-        if self.left <= 0:
-            self.why = f"max_instances = {self.settings.max_instances} ran out"
-            raise _OverBudget
-        if time.monotonic() > self.deadline:
-            self.why = f"max_seconds = {self.settings.max_seconds:g} ran out"
-            raise _OverBudget
-        self.left -= 1
-        self.used += 1
-
-
-Factory = Callable[[str, Mapping[int, float], float], Any]
-
-
-class _At:
-    """One point of Initialization Mode: the knowns as a vector (time included), each function
-    value a fresh instance."""
-
-    def __init__(self, factory: Factory, mode: str, layout: JacobianLayout, point: Point,
-                 counter: _Counter):
-        self.factory, self.mode, self.layout, self.counter = factory, mode, layout, counter
-        self.rows = [r.vr for r in layout.rows]
-        self.time = [j for j, c in enumerate(layout.cols) if c.role == "time"]
-        self.t = point.t
-        self.x = np.array([point.t if c.role == "time" else point.values[c.vr]
-                           for c in layout.cols])
-        self.dd_idx = np.flatnonzero(layout.dd_columns)
-        self.dd_vrs = [layout.cols[j].vr for j in self.dd_idx]
-        self.base: Any = None
-
-    def _knowns(self, delta: np.ndarray) -> tuple[dict[int, float], float]:
-        x = self.x + delta
-        t = float(x[self.time[0]]) if self.time else self.t
-        return ({c.vr: float(v) for c, v in zip(self.layout.cols, x) if c.role != "time"}, t)
-
-    def open(self, delta: np.ndarray) -> Any:
-        self.counter.spend()
-        values, t = self._knowns(delta)
-        return self.factory(self.mode, values, t)
-
-    def fun(self, delta: np.ndarray) -> np.ndarray:
-        inst = self.open(delta)
-        try:
-            return np.asarray(inst.get_float64(self.rows), dtype=float)
-        finally:
-            inst.free()
-
-    def directional(self, seed: np.ndarray) -> np.ndarray:
-        return np.asarray(self.base.directional_as_set(
-            self.rows, self.dd_vrs, np.asarray(seed, dtype=float)[self.dd_idx]), dtype=float)
-
-
 def _points(t0: float, layout: Layout, start: dict[int, float], count: int,
             rng: np.random.Generator) -> list[Point]:
     first = Point(t0, dict(start), "start")
@@ -190,7 +122,7 @@ def _run(ctx: ProbeContext, settings: SurveySettings) -> InitialSurvey:
     colouring = col.colour_columns(jl.pattern)
     per_point = 1 + numdiff.CALLS_PER_DIRECTION[MEASURING.method] * (
         colouring.count + MEASURING.directions)
-    counter = _Counter(settings)
+    counter = InstanceCounter(settings)
     result.factory, result.counter = ctx.new_initialization, counter
     for point in points:
         need = per_point + (1 if result.directional else 0)
@@ -202,7 +134,7 @@ def _run(ctx: ProbeContext, settings: SurveySettings) -> InitialSurvey:
         try:
             measured = _measure_point(ctx.new_initialization, mode, jl, point, result, colouring,
                                       rng, counter)
-        except _OverBudget:
+        except OverBudget:
             result.budget_stop = (f"{counter.why} while point {point.label} was measured, "
                                   f"after {len(result.points)} point(s)")
             break
@@ -223,8 +155,8 @@ def _run(ctx: ProbeContext, settings: SurveySettings) -> InitialSurvey:
 
 def _measure_point(factory: Factory, mode: str, layout: JacobianLayout, point: Point,
                    result: InitialSurvey, colouring: col.Colouring, rng: np.random.Generator,
-                   counter: _Counter) -> PointSurvey | None:
-    at = _At(factory, mode, layout, point, counter)
+                   counter: InstanceCounter) -> PointSurvey | None:
+    at = InitialPoint(factory, mode, layout, point, counter)
     lower = np.array([c.lower for c in layout.cols])
     upper = np.array([c.upper for c in layout.cols])
     steps = numdiff.step_sizes(at.x, layout.nominal, method=MEASURING.method, lower=lower,
@@ -259,7 +191,8 @@ def _measure_point(factory: Factory, mode: str, layout: JacobianLayout, point: P
     return PointSurvey(point, at.x, entries)
 
 
-def _check_independent(at: _At, f0: np.ndarray, point: Point, result: InitialSurvey) -> None:
+def _check_independent(at: InitialPoint, f0: np.ndarray, point: Point,
+                       result: InitialSurvey) -> None:
     """The directional derivatives come from an instance kept open while fresh ones give the
     function values: if it no longer holds the values a fresh instance computes at its point,
     the instances share state, its derivatives are taken elsewhere, and no verdict may rest on
@@ -299,14 +232,14 @@ def confirm(s: InitialSurvey, ps: PointSurvey, j: int, *, factor: float, ulps: f
     steps = numdiff.step_sizes(ps.x, scale, method=MEASURING.method, lower=lower, upper=upper)
     out = None
     if steps[j] > 0 and s.counter is not None and not s.fatal:
-        at = _At(s.factory, s.mode, layout, ps.point, s.counter)
+        at = InitialPoint(s.factory, s.mode, layout, ps.point, s.counter)
         direction = np.zeros(len(layout.cols))
         direction[j] = steps[j]
         try:
             diff = numdiff.difference(at.fun, direction, method=MEASURING.method)
         except FmiError as exc:
             _note_fatal(s, exc)
-        except (_OverBudget, ProbeSkipped):
+        except (OverBudget, ProbeSkipped):
             pass
         else:
             noise = ulps * ps.entries.basis

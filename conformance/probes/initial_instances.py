@@ -1,0 +1,92 @@
+"""Fresh Initialization-Mode instances within the survey's budget (for :mod:`.initial_survey`).
+
+Every function value of the Initialization-Mode survey is a fresh instance, so the survey's
+options bound the instances and the wall-clock time over all points: :class:`InstanceCounter`
+counts both and raises :class:`OverBudget` past either; :class:`InitialPoint` evaluates one point
+with a new instance per call.
+"""
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from .api import Point
+from .jacobian_layout import JacobianLayout
+
+
+@dataclass(frozen=True)
+class SurveySettings:
+    """The survey's options (those of ``initial-dependency-undeclared``)."""
+
+    points: int           # sampling points, the start values included
+    max_instances: int    # fresh instances over all points
+    max_seconds: float    # wall-clock time over all points
+
+
+class OverBudget(Exception):
+    pass
+
+
+class InstanceCounter:
+    """Fresh instances and seconds left; :meth:`spend` raises OverBudget past either."""
+
+    def __init__(self, settings: SurveySettings):
+        self.settings = settings
+        self.left, self.used = settings.max_instances, 0
+        self.deadline = time.monotonic() + settings.max_seconds
+        self.why = ""
+
+    def spend(self) -> None:
+        if self.left <= 0:
+            self.why = f"max_instances = {self.settings.max_instances} ran out"
+            raise OverBudget
+        if time.monotonic() > self.deadline:
+            self.why = f"max_seconds = {self.settings.max_seconds:g} ran out"
+            raise OverBudget
+        self.left -= 1
+        self.used += 1
+
+
+Factory = Callable[[str, Mapping[int, float], float], Any]
+
+
+class InitialPoint:
+    """One point of Initialization Mode: the knowns as a vector (time included), each function
+    value a fresh instance."""
+
+    def __init__(self, factory: Factory, mode: str, layout: JacobianLayout, point: Point,
+                 counter: InstanceCounter):
+        self.factory, self.mode, self.layout, self.counter = factory, mode, layout, counter
+        self.rows = [r.vr for r in layout.rows]
+        self.time = [j for j, c in enumerate(layout.cols) if c.role == "time"]
+        self.t = point.t
+        self.x = np.array([point.t if c.role == "time" else point.values[c.vr]
+                           for c in layout.cols])
+        self.dd_idx = np.flatnonzero(layout.dd_columns)
+        self.dd_vrs = [layout.cols[j].vr for j in self.dd_idx]
+        self.base: Any = None
+
+    def _knowns(self, delta: np.ndarray) -> tuple[dict[int, float], float]:
+        x = self.x + delta
+        t = float(x[self.time[0]]) if self.time else self.t
+        return ({c.vr: float(v) for c, v in zip(self.layout.cols, x) if c.role != "time"}, t)
+
+    def open(self, delta: np.ndarray) -> Any:
+        self.counter.spend()
+        values, t = self._knowns(delta)
+        return self.factory(self.mode, values, t)
+
+    def fun(self, delta: np.ndarray) -> np.ndarray:
+        inst = self.open(delta)
+        try:
+            return np.asarray(inst.get_float64(self.rows), dtype=float)
+        finally:
+            inst.free()
+
+    def directional(self, seed: np.ndarray) -> np.ndarray:
+        return np.asarray(self.base.directional_as_set(
+            self.rows, self.dd_vrs, np.asarray(seed, dtype=float)[self.dd_idx]), dtype=float)

@@ -56,7 +56,10 @@ def run_pooled(paths: Sequence[str], job: Job, jobs: int, progress: Progress,
                 progress.finish(paths[i])
         except BaseException:  # Ctrl-C: start nothing more, stop the running checks now
             _kill_workers(pool)  # first: shutdown forgets the processes
-            pool.shutdown(wait=False, cancel_futures=True)
+            # Wait for the pool's manager thread, which sees its workers dead at once: left
+            # running, it may close its wake-up pipe while the interpreter's exit hook writes
+            # to it ("Exception ignored ... Bad file descriptor" on stderr, CPython 3.11).
+            pool.shutdown(wait=True, cancel_futures=True)
             raise
     for i in sorted(broken):  # the pool died: find out which job killed it
         log.info("re-checking %s in a fresh process after a worker died", paths[i])

@@ -31,7 +31,7 @@ FLOORS: list[tuple[str, ...]] = [
      "element_path", "manifest", "layer", "reporters", "ruledocs", "baseline", "result_cache",
      "source_texts"),
     ("drafts", "catalogue", "config"),
-    ("numerics", "model", "model_parts", "unknowns", "bipartite", "matching", "dulmage_mendelsohn", "findings",
+    ("numerics", "model", "model_parts", "unknowns", "findings",
      "paths", "progress", "process_pool", "background", "heap", "attributes", "definitions", "structured_names",
      "__init__", "sharding", "report_reader"),
 ]

@@ -1,6 +1,6 @@
 """The coarse Dulmage-Mendelsohn decomposition of the residual/algebraic-variable graph.
 
-When the matching (:mod:`conformance.matching`) is not perfect, the decomposition says why, in
+When the matching (:mod:`conformance.numerics.graphs.matching`) is not perfect, the decomposition says why, in
 terms a vendor can act on. With a maximum matching ``M``:
 
 - the *over-determined* part holds the rows reachable from an unmatched row by an alternating

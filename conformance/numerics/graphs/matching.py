@@ -2,7 +2,7 @@
 
 The rows that are not full are matched with scipy's Hopcroft-Karp on a CSR graph, so a
 25 000 x 25 000 chain takes a few milliseconds; the full rows (``dependencies`` absent, MS-20,
-see :mod:`conformance.bipartite`) then take the columns the sparse rows left free.
+see :mod:`conformance.numerics.graphs.bipartite`) then take the columns the sparse rows left free.
 """
 from __future__ import annotations
 

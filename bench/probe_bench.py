@@ -48,7 +48,7 @@ from conformance.manifest import read_manifest
 from conformance.model import read_model_description
 from conformance.numerics import colouring as col
 from conformance.numerics import measure
-from conformance.catalogue import default_catalogue
+from conformance.report.catalogue import default_catalogue
 from conformance.probes.registry import PROBES
 from conformance.probes import jacobian as J
 from conformance.numerics import numdiff

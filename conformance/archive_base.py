@@ -14,7 +14,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, fields
 from typing import Any
 
-from conformance.findings import Location, Violation, evidence
+from conformance.report.findings import Location, Violation, evidence
 
 UNREADABLE = "archive-unreadable"
 UNSAFE_PATH = "unsafe-archive-path"

@@ -20,7 +20,7 @@ from conformance.archive_base import (
     normalise_name,
     show_name,
 )
-from conformance.findings import Location, Violation, evidence
+from conformance.report.findings import Location, Violation, evidence
 
 
 @dataclass(slots=True)

@@ -26,7 +26,7 @@ from conformance.archive_base import (
     normalise_name,
     show_name,
 )
-from conformance.findings import Location, Violation, evidence
+from conformance.report.findings import Location, Violation, evidence
 
 _CHUNK = MiB
 _O_NOFOLLOW = getattr(os, "O_NOFOLLOW", 0)

@@ -17,15 +17,15 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
-from .baseline import Baseline, BaselineError, BaselineResult
-from .baseline import apply as apply_baseline
-from .baseline import load as load_baseline
-from .baseline import write as write_baseline
-from .catalogue import Catalogue, default_catalogue, with_options
+from .report.baseline import Baseline, BaselineError, BaselineResult
+from .report.baseline import apply as apply_baseline
+from .report.baseline import load as load_baseline
+from .report.baseline import write as write_baseline
+from .report.catalogue import Catalogue, default_catalogue, with_options
 from .config import ConfigError, load_config
 from .engine import EngineOptions
 from .exit_codes import EXIT_FINDINGS, EXIT_INTERRUPTED, EXIT_OK, EXIT_USAGE, UsageError
-from .findings import Report, RunInfo, Severity
+from .report.findings import Report, RunInfo, Severity
 from .fleet import plan as fleet_plan
 from .parallel import check_all
 from .precommit import fmu_roots

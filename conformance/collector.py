@@ -10,9 +10,9 @@ import re
 from dataclasses import replace
 from typing import Iterable, Protocol
 
-from .catalogue import RuleSpec
+from .report.catalogue import RuleSpec
 from .engine_options import RuleSelection
-from .findings import Finding, Location, Violation, evidence
+from .report.findings import Finding, Location, Violation, evidence
 
 GROUP_SHOWN = 5
 START_TAG_LOOKBACK = 200  # lines searched upwards for the '<' that starts a tag

@@ -4,7 +4,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any, Callable, Iterable, TypeVar
 
-from .findings import Violation
+from .report.findings import Violation
 from .layer import layer_declaration
 from .manifest import Manifest
 from .model import ModelDescription

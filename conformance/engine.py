@@ -18,12 +18,12 @@ from pathlib import Path
 from typing import Iterator, Sequence
 
 from . import __version__
-from .catalogue import Catalogue, default_catalogue
+from .report.catalogue import Catalogue, default_catalogue
 from .checks import REGISTRY
 from .collector import Collector
 from .context import CheckContext
 from .engine_options import EngineOptions, RuleSelection
-from .findings import FmuReport, Report, Violation, evidence
+from .report.findings import FmuReport, Report, Violation, evidence
 from .fmu import ArchiveLimits, open_fmu
 from .heap import RELEASE_FROM, release_freed_memory
 from .layer import skip_reason

@@ -22,10 +22,10 @@ from pathlib import Path
 from typing import Any, Mapping, Sequence
 
 from . import __version__
-from .catalogue import Catalogue
+from .report.catalogue import Catalogue
 from .engine_options import EngineOptions
-from .findings import FmuReport, Report, evidence
-from .paths import schemas_dir
+from .report.findings import FmuReport, Report, evidence
+from .report.paths import schemas_dir
 from .result_cache import ResultCache, content_hash
 from .sharding import assign, input_names, input_size, inputs_digest, parse_shard
 

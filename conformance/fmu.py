@@ -32,8 +32,8 @@ from conformance.archive_base import (
 )
 from conformance.archive_scan import scan
 from conformance.archive_source import ArchiveReadError, FmuSource
-from conformance.catalogue import default_catalogue
-from conformance.findings import Violation
+from conformance.report.catalogue import default_catalogue
+from conformance.report.findings import Violation
 
 __all__ = [
     "COMPRESSION",

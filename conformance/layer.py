@@ -16,7 +16,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Mapping, Sequence
 
-from .findings import Location, Violation, evidence
+from .report.findings import Location, Violation, evidence
 from .manifest import MANIFEST
 from .model import ModelDescription
 

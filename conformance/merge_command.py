@@ -18,11 +18,11 @@ from pathlib import Path
 from typing import Any
 
 from . import __version__
-from .baseline import apply as apply_baseline
-from .catalogue import Catalogue, default_catalogue, with_options
+from .report.baseline import apply as apply_baseline
+from .report.catalogue import Catalogue, default_catalogue, with_options
 from .exit_codes import EXIT_OK, EXIT_USAGE, UsageError
-from .findings import Report, RunInfo, thaw
-from .report_reader import ReportFormatError, read_report
+from .report.findings import Report, RunInfo, thaw
+from .report.reader import ReportFormatError, read_report
 
 
 def run(args: argparse.Namespace) -> int:

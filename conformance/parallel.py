@@ -15,10 +15,10 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Callable, Sequence
 
-from .catalogue import Catalogue, default_catalogue
+from .report.catalogue import Catalogue, default_catalogue
 from .engine import EngineOptions, check_fmu, check_paths
 from .engine_options import RuleSelection
-from .findings import Finding, FmuReport, Location, Report, evidence
+from .report.findings import Finding, FmuReport, Location, Report, evidence
 from .progress import NoProgress, Progress
 
 log = logging.getLogger(__name__)

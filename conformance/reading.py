@@ -15,7 +15,7 @@ from .collector import Collector
 from .drafts.detect import UNKNOWN, detect_draft, unrecognised_violations
 from .drafts.migrate import legacy_violations
 from .engine_options import EngineOptions
-from .findings import Location, Violation, evidence
+from .report.findings import Location, Violation, evidence
 from .fmu import ArchiveReadError
 from .layer import manifest_missing
 from .manifest import MANIFEST, Manifest, read_manifest

@@ -9,7 +9,7 @@ unchanged FMU checked with the same settings gets its stored :class:`FmuReport` 
 checked again; one changed byte is another key.
 
 Entries are JSON files (the JSON reporter's form plus the source lines, read back with
-:mod:`conformance.report_reader`) written to a temporary file and moved into place with
+:mod:`conformance.report.reader`) written to a temporary file and moved into place with
 :func:`os.replace`, so parallel jobs sharing the folder and interrupted runs never leave half an
 entry. An entry that cannot be read, or is not what its name says, is a miss, never an error.
 """
@@ -23,8 +23,8 @@ import stat
 import tempfile
 from pathlib import Path
 
-from .findings import FmuReport
-from .report_reader import read_fmu
+from .report.findings import FmuReport
+from .report.reader import read_fmu
 from .reporters.json_report import fmu_dict
 
 log = logging.getLogger(__name__)

@@ -1,7 +1,7 @@
 """Render the rule catalogue as Markdown (docs/rules.md is generated from it, never by hand)."""
 from __future__ import annotations
 
-from .catalogue import Catalogue, RuleSpec
+from .report.catalogue import Catalogue, RuleSpec
 from .drafts.names import DRAFT_LABELS
 
 HEADER = """# lsdae rules

@@ -4,7 +4,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from .catalogue import Catalogue, RuleSpec, default_catalogue
+from .report.catalogue import Catalogue, RuleSpec, default_catalogue
 from .drafts.names import DRAFT_LABELS
 from .exit_codes import EXIT_OK, UsageError
 from .ruledocs import render_markdown

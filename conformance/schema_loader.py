@@ -24,7 +24,7 @@ from pathlib import Path
 from lxml import etree
 
 from .drafts.detect import ALPHA1, ATTRIBUTES_ONLY, FLAT_INDEX, FORMULATION, LS_DAE_ROOT
-from .paths import schemas_dir
+from .report.paths import schemas_dir
 
 log = logging.getLogger(__name__)
 

@@ -34,7 +34,7 @@ from .drafts.detect import (
     LS_NAMESPACE,
 )
 from .drafts.elements import all_elements, written_name
-from .findings import Location, Violation, evidence
+from .report.findings import Location, Violation, evidence
 from .schema_loader import (
     BUILD_DESCRIPTION_XSD,
     MODEL_DESCRIPTION_XSD,

@@ -27,9 +27,9 @@ from pathlib import Path
 from typing import Any
 
 from .arguments import add_simulate_parser as add_parser
-from .catalogue import default_catalogue
+from .report.catalogue import default_catalogue
 from .exit_codes import EXIT_FINDINGS, EXIT_OK, EXIT_USAGE
-from .findings import Report, Severity
+from .report.findings import Report, Severity
 from .reporters import REPORTER_BY_NAME
 from .simulate_fmu import (RULES_BY_MODE, Simulation, default_experiment, read_model,
                            simulate_fmu, start_values)

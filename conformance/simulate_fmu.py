@@ -16,9 +16,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from .catalogue import Catalogue, default_catalogue
+from .report.catalogue import Catalogue, default_catalogue
 from .engine import EngineOptions, check_fmu
-from .findings import thaw
+from .report.findings import thaw
 from .fmu import MODEL_DESCRIPTION, ArchiveReadError, open_fmu
 from .model import ModelDescription, read_model_description
 from .xmlsafe import parse_xml

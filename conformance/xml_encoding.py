@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import re
 
-from conformance.findings import Location, Violation, evidence
+from conformance.report.findings import Location, Violation, evidence
 
 ENCODING = "xml-encoding"
 

@@ -1,7 +1,7 @@
 """Parse XML from an untrusted FMU safely, and say precisely why a document cannot be used.
 
 :func:`parse_xml` never expands or fetches entities, never touches the network, keeps source
-lines, and never raises: every problem becomes a :class:`~conformance.findings.Violation` with one
+lines, and never raises: every problem becomes a :class:`~conformance.report.findings.Violation` with one
 of these pseudo-rules
 
 - ``xml-not-well-formed``: the first (namespace) well-formedness error, with line and column.
@@ -22,7 +22,7 @@ from dataclasses import replace
 from lxml import etree
 
 from conformance.drafts.detect import LS_NAMESPACE
-from conformance.findings import Location, Violation, evidence
+from conformance.report.findings import Location, Violation, evidence
 from conformance.xml_encoding import ENCODING, encoding_violations
 
 log = logging.getLogger(__name__)

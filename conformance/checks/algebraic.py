@@ -18,7 +18,7 @@ from itertools import repeat
 from operator import attrgetter, is_not
 
 from ..context import Check, CheckContext
-from ..findings import Location, Violation, evidence
+from ..report.findings import Location, Violation, evidence
 from ..manifest import Manifest, VrRef
 from ..model import FLOAT_TYPES, ModelDescription, Variable
 from ..unknowns import parse_uint

@@ -19,7 +19,7 @@ from ..attributes import (
     attribute_problems,
 )
 from ..context import Check, CheckContext
-from ..findings import Violation, evidence
+from ..report.findings import Violation, evidence
 from ..model import FLOAT_TYPES, ModelDescription, Variable, VariableDetails
 from .model_analysis import analyse, var_loc
 

@@ -14,7 +14,7 @@ from operator import attrgetter
 from typing import Iterator
 
 from ..context import CheckContext
-from ..findings import Location, Violation, evidence
+from ..report.findings import Location, Violation, evidence
 from ..manifest import VrRef
 from ..model import Variable
 from .model_analysis import analyse

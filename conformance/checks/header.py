@@ -10,7 +10,7 @@ from typing import Iterator
 
 from ..context import CheckContext
 from ..drafts.detect import ALPHA1, ALPHA1_DESCRIPTION, ALPHA1_NAME, ALPHA1_VERSION
-from ..findings import Location, Violation, evidence
+from ..report.findings import Location, Violation, evidence
 from ..manifest import MANIFEST, Manifest
 
 MANIFEST_FILE = "fmi-ls-manifest.xml"

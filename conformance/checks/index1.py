@@ -17,7 +17,7 @@ from operator import attrgetter
 from typing import TYPE_CHECKING, Iterable, Iterator, Sequence
 
 from ..context import Check, CheckContext
-from ..findings import Location, Violation, evidence
+from ..report.findings import Location, Violation, evidence
 from ..manifest import VrRef
 from ..model import ModelDescription, Variable
 from ..unknowns import Unknown

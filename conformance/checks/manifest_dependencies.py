@@ -16,7 +16,7 @@ from typing import Iterator
 
 from ..context import Check, CheckContext
 from ..drafts.detect import FORMULATION, LS_DAE_ROOT
-from ..findings import Location, Violation, evidence
+from ..report.findings import Location, Violation, evidence
 from ..model import FLOAT_TYPES, ModelDescription, Variable
 from ..unknowns import Unknown
 from .dae_roles import DaeRoles, describe, roles_of

@@ -12,7 +12,7 @@ from collections.abc import Iterator, Sequence
 from operator import attrgetter
 
 from ..context import Check, CheckContext
-from ..findings import Location, Violation, evidence
+from ..report.findings import Location, Violation, evidence
 from ..model import ModelDescription
 from ..unknowns import Unknown
 from .dae_roles import describe, roles_of

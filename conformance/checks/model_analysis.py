@@ -13,7 +13,7 @@ from operator import attrgetter
 from typing import Optional
 
 from ..context import CheckContext
-from ..findings import Location
+from ..report.findings import Location
 from ..model import FLOAT_TYPES, ModelDescription, Variable, VariableDetails
 from ..unknowns import Unknown
 

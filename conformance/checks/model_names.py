@@ -18,7 +18,7 @@ from collections.abc import Iterator
 from operator import attrgetter
 
 from ..context import Check, CheckContext
-from ..findings import Location, Violation, evidence
+from ..report.findings import Location, Violation, evidence
 from ..model import ModelDescription, Variable
 from ..structured_names import all_structured, is_structured_name, name_problem
 from .model_analysis import analyse

@@ -18,7 +18,7 @@ from collections.abc import Iterator
 from operator import attrgetter
 
 from ..context import Check, CheckContext
-from ..findings import Location, Violation, evidence
+from ..report.findings import Location, Violation, evidence
 from ..model import Dimension, ModelDescription, Variable
 from .model_analysis import analyse, enable_vrs, unknown_loc, var_loc
 

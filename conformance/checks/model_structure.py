@@ -14,7 +14,7 @@ from itertools import chain
 from operator import attrgetter, is_not, itemgetter
 
 from ..context import Check, CheckContext
-from ..findings import Location, Violation, evidence
+from ..report.findings import Location, Violation, evidence
 from ..model import ModelDescription, Variable
 from ..unknowns import Unknown
 from .model_analysis import analyse, unknown_loc, var_loc

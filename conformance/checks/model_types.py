@@ -19,7 +19,7 @@ from collections.abc import Iterator
 
 from ..context import Check, CheckContext
 from ..definitions import TypeDefinition, UnitDefinition
-from ..findings import Location, Violation, evidence
+from ..report.findings import Location, Violation, evidence
 from ..model import ModelDescription, Variable
 from .model_analysis import analyse, var_loc
 

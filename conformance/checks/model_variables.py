@@ -18,7 +18,7 @@ from operator import attrgetter
 from typing import Iterator
 
 from ..context import Check, CheckContext
-from ..findings import Location, Violation, evidence
+from ..report.findings import Location, Violation, evidence
 from ..model import FLOAT_TYPES, Variable
 from ..unknowns import Unknown
 from .model_analysis import (

@@ -20,7 +20,7 @@ from itertools import repeat
 from operator import attrgetter, is_not
 
 from ..context import Check, CheckContext
-from ..findings import Location, Violation, evidence
+from ..report.findings import Location, Violation, evidence
 from ..model import FLOAT_TYPES, Variable
 from ..unknowns import Unknown
 from .algebraic import element_count, states_of

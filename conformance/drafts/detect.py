@@ -27,7 +27,7 @@ from typing import Iterator
 
 from lxml import etree
 
-from ..findings import Location, Violation, evidence
+from ..report.findings import Location, Violation, evidence
 from .elements import children_named, residual_elements, written_name
 from .names import (  # noqa: F401  (re-exported: the draft names belong with recognition)
     ALL_DRAFTS, ALPHA1, ALPHA1_DESCRIPTION, ALPHA1_NAME, ALPHA1_VERSION, ATTRIBUTES_ONLY, AUTO,

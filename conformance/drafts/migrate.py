@@ -10,7 +10,7 @@ from typing import Iterator, Sequence
 
 from lxml import etree
 
-from ..findings import Location, Violation, evidence
+from ..report.findings import Location, Violation, evidence
 from .detect import (
     ALPHA1_DESCRIPTION,
     ALPHA1_NAME,

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ..archive_base import TOO_LARGE, UNREADABLE, UNSAFE_PATH
-from ..findings import Finding, FmuReport
+from ..report.findings import Finding, FmuReport
 from .archive import Package, PackageError
 from .change import Change, NoFix
 from .edits import EditConflict, apply_edits, by_file

@@ -18,7 +18,7 @@ from collections.abc import Sequence
 
 from ..drafts.detect import ATTRIBUTES_ONLY, LEGACY_DRAFTS, LS_NAMESPACE
 from ..drafts.migrate import MODEL_STRUCTURE_ORDER
-from ..findings import Finding
+from ..report.findings import Finding
 from ..model import MODEL_DESCRIPTION
 from ..xmlsafe import parse_xml
 from .archive import Package

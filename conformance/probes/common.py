@@ -11,7 +11,7 @@ from typing import Any, Iterator, Sequence
 
 import numpy as np
 
-from ..findings import Location
+from ..report.findings import Location
 from ..model import MODEL_DESCRIPTION
 from .api import FmiError, ProbeContext, ProbeSkipped
 from ..runtime.instance import Instance

@@ -18,7 +18,7 @@ from typing import Iterator
 
 import numpy as np
 
-from ..findings import Violation, evidence
+from ..report.findings import Violation, evidence
 from ..numerics import numdiff
 from .api import ProbeContext, ProbeSkipped
 from .entry_comparison import directional_options, directional_verdict

@@ -24,7 +24,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-from ..catalogue import default_catalogue
+from ..report.catalogue import default_catalogue
 from ..runtime.child import memory_info
 from ..runtime.instance import Instance
 from ..runtime.layout import Layout

@@ -23,7 +23,7 @@ from typing import Any, Callable, Iterator, Sequence
 
 import numpy as np
 
-from ..findings import Location, Violation, evidence
+from ..report.findings import Location, Violation, evidence
 from ..runtime.instance import Instance, PointNotSet
 from ..runtime.layout import Layout
 from ..unknowns import Unknown

@@ -21,7 +21,7 @@ import math
 
 
 from ..attributes import declared_nominal
-from ..findings import Location
+from ..report.findings import Location
 from ..model import ModelDescription, Unknown, Variable
 from ..runtime.layout import Layout
 from .api import ProbeContext

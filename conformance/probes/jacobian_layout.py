@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..attributes import declared_nominal, usable_bounds, usable_nominal
-from ..findings import Location
+from ..report.findings import Location
 from ..model import ModelDescription, Unknown, Variable
 from ..numerics import colouring as col
 from .api import ProbeContext

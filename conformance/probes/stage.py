@@ -26,7 +26,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from ..findings import Location, Violation, evidence
+from ..report.findings import Location, Violation, evidence
 from ..runtime.callrecord import CallRecord
 from ..runtime.child import memory_info
 from ..runtime.layout import Layout

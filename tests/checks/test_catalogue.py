@@ -5,7 +5,7 @@ import re
 
 import pytest
 
-from conformance.catalogue import default_catalogue
+from conformance.report.catalogue import default_catalogue
 from conformance.checks import REGISTRY
 from conformance.rules_command import explain_text
 from tests.fixturekit import FIXTURES

@@ -6,10 +6,10 @@ import dataclasses
 import pytest
 
 from conformance import engine
-from conformance.catalogue import Catalogue, default_catalogue
+from conformance.report.catalogue import Catalogue, default_catalogue
 from conformance.checks import REGISTRY
 from conformance.engine import EngineOptions, check_fmu
-from conformance.findings import Severity, Violation
+from conformance.report.findings import Severity, Violation
 from conformance.layer import NOT_A_DAE_FMU
 from tests.fixturekit import Case, materialise, zip_scene
 
@@ -129,7 +129,7 @@ def test_a_file_left_out_by_an_archive_limit_is_not_read_not_missing(tmp_path):
 def test_a_reader_that_fails_never_calls_a_present_manifest_absent(tmp_path, monkeypatch):
     """When lsdae itself fails before the manifest is read, the summary says the manifest is
     there and not checked, and the console never says "no fmi-ls-dae manifest"."""
-    from conformance.findings import Report
+    from conformance.report.findings import Report
     from conformance.reporters import console
 
     def broken(*_args, **_kwargs):

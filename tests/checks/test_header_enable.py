@@ -74,7 +74,7 @@ def test_codes_are_in_our_ranges():
 
 
 def test_catalogue_names_match_functions():
-    from conformance.catalogue import load_catalogue
+    from conformance.report.catalogue import load_catalogue
     cat = load_catalogue()
     for code, fn in {**header.CHECKS, **enable.CHECKS}.items():
         assert cat[code].name.replace("-", "_") == fn.__name__

@@ -6,7 +6,7 @@ import pytest
 from lxml import etree
 
 from bench.generate import manifest_xml, model_description_xml
-from conformance.catalogue import default_catalogue
+from conformance.report.catalogue import default_catalogue
 from conformance.checks import REGISTRY, index1, manifest_dependencies, manifest_lists
 from conformance.context import CheckContext
 from conformance.manifest import MANIFEST, Manifest, VrRef, read_manifest

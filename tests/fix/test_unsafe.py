@@ -5,7 +5,7 @@ import pytest
 
 from conformance.cli import main
 from conformance.engine import EngineOptions, check_fmu
-from conformance.findings import Finding, Location, Severity, evidence
+from conformance.report.findings import Finding, Location, Severity, evidence
 from conformance.fix_command import fix_fmu
 from conformance.fixes.apply import keys
 from conformance.fixes.edits import apply_edits

@@ -245,7 +245,7 @@ def test_hits_and_misses_in_parallel_processes_keep_the_input_order(fmus, tmp_pa
 def test_an_interrupted_run_keeps_what_it_checked_and_stores_only_that(fmus, tmp_path):
     from dataclasses import replace
 
-    from conformance.catalogue import default_catalogue
+    from conformance.report.catalogue import default_catalogue
     from conformance.engine import EngineOptions, check_paths
     from conformance.fleet import plan
 

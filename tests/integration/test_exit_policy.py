@@ -5,7 +5,7 @@ import json
 
 import pytest
 
-from conformance.baseline import identity, load
+from conformance.report.baseline import identity, load
 from conformance.cli import main
 from tests.integration.conftest import BOOLEAN_DAE, INT_DAE
 
@@ -143,7 +143,7 @@ def test_unreadable_baseline_is_a_usage_error(fmu, tmp_path, capsys):
 
 
 def test_identity_prefers_subject_then_path_then_message():
-    from conformance.findings import Finding, Location, Severity
+    from conformance.report.findings import Finding, Location, Severity
     base = Finding("DAE001", "x", Severity.ERROR, "msg", Location("f", 3, path="/a"), (), "s")
     assert identity(base) == "s"
     assert identity(Finding("DAE001", "x", Severity.ERROR, "msg", Location("f", 3, path="/a"))

@@ -5,7 +5,7 @@ import io
 
 import pytest
 
-from conformance.catalogue import default_catalogue
+from conformance.report.catalogue import default_catalogue
 from conformance.cli import main
 from conformance.engine import EngineOptions
 from conformance.parallel import check_all

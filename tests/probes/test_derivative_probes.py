@@ -14,7 +14,7 @@ import pytest
 from lxml import etree
 from scipy.optimize import fsolve
 
-from conformance.catalogue import default_catalogue
+from conformance.report.catalogue import default_catalogue
 from conformance.manifest import read_manifest
 from conformance.model import read_model_description
 from conformance.probes import derivatives as D

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 from lxml import etree
 
-from conformance.catalogue import default_catalogue
+from conformance.report.catalogue import default_catalogue
 from conformance.manifest import read_manifest
 from conformance.model import read_model_description
 from conformance.probes import basic, evaluation

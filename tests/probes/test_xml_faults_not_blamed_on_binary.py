@@ -9,7 +9,7 @@ from __future__ import annotations
 import pytest
 
 from conformance.engine import EngineOptions, check_fmu
-from conformance.findings import Severity
+from conformance.report.findings import Severity
 from tests.fixtures.defects.variants import variant
 
 X = ('<Float64 name="x1" valueReference="1" causality="local" variability="continuous" '

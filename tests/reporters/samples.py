@@ -15,9 +15,9 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from conformance.catalogue import Catalogue, RuleSpec, default_catalogue
+from conformance.report.catalogue import Catalogue, RuleSpec, default_catalogue
 from conformance.engine import EngineOptions, check_fmu
-from conformance.findings import (
+from conformance.report.findings import (
     Finding,
     FmuReport,
     Location,

@@ -19,7 +19,7 @@ import pytest
 from fmpy.validation import validate_fmu
 from lxml import etree
 
-from conformance.catalogue import default_catalogue
+from conformance.report.catalogue import default_catalogue
 from conformance.cli import main
 from conformance.engine import EngineOptions, check_fmu
 from conformance.layer import NOT_A_DAE_FMU

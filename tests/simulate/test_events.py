@@ -12,7 +12,7 @@ import fmpy
 import numpy as np
 import pytest
 
-from conformance.findings import thaw
+from conformance.report.findings import thaw
 from conformance.simulate_command import add_parser, run, simulate_fmu, summary
 from scenes.build import build_scene
 from tests.simkit import sim_settings

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import pytest
 
-from conformance.catalogue import default_catalogue
+from conformance.report.catalogue import default_catalogue
 from conformance.runtime.modes import start_instance
 from conformance.simulate.integrate import simulate_instance
 from conformance.simulate.jacobian_check import DerivativeCheck, choose_jacobian

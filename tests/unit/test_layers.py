@@ -28,12 +28,11 @@ FLOORS: list[tuple[str, ...]] = [
     ("runtime", "precommit", "context"),
     ("fmu", "archive_source", "archive_scan", "archive_zip", "archive_folder", "archive_inventory",
      "archive_base", "schemas", "schema_loader", "schema_messages", "xmlsafe", "xml_encoding",
-     "element_path", "manifest", "layer", "reporters", "ruledocs", "baseline", "result_cache",
+     "element_path", "manifest", "layer", "reporters", "ruledocs", "result_cache",
      "source_texts"),
-    ("drafts", "catalogue", "config"),
-    ("numerics", "model", "model_parts", "unknowns", "findings",
-     "paths", "progress", "process_pool", "background", "heap", "attributes", "definitions", "structured_names",
-     "__init__", "sharding", "report_reader"),
+    ("drafts", "config"),
+    ("numerics", "model", "model_parts", "unknowns", "report", "progress", "process_pool", "background", "heap", "attributes", "definitions", "structured_names",
+     "__init__", "sharding"),
 ]
 
 

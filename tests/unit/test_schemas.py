@@ -10,7 +10,7 @@ from lxml import etree
 
 from conformance import schema_loader, schemas
 from conformance.drafts import detect, migrate
-from conformance.findings import Violation
+from conformance.report.findings import Violation
 from conformance.schema_messages import clean_message
 
 DATA = Path(__file__).parent / "data" / "manifests"

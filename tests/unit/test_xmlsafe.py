@@ -8,9 +8,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from lxml import etree
 
-from conformance.catalogue import load_catalogue
+from conformance.report.catalogue import load_catalogue
 from conformance.element_path import element_path
-from conformance.paths import rules_dir
+from conformance.report.paths import rules_dir
 from conformance.xmlsafe import parse_xml
 
 EMITTED = {"xml-not-well-formed", "xml-unsafe-construct", "xml-encoding"}

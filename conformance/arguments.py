@@ -12,7 +12,7 @@ from typing import Any
 
 from . import __version__
 from .config import ENDURANCE_LEVELS, FAIL_ON
-from .drafts.names import ALL_DRAFTS
+from .model.drafts.names import ALL_DRAFTS
 from .reporters import FORMATS
 
 

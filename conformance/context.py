@@ -5,9 +5,9 @@ from dataclasses import dataclass, field
 from typing import Any, Callable, Iterable, TypeVar
 
 from .report.findings import Violation
-from .layer import layer_declaration
-from .manifest import Manifest
-from .model import ModelDescription
+from .model.layer import layer_declaration
+from .model.manifest import Manifest
+from .model.description import ModelDescription
 
 
 T = TypeVar("T")
@@ -25,7 +25,7 @@ class CheckContext:
 
     @property
     def dae_layer(self) -> bool:
-        """Whether the FMU declares the fmi-ls-dae layer (:mod:`conformance.layer`)."""
+        """Whether the FMU declares the fmi-ls-dae layer (:mod:`conformance.model.layer`)."""
         return self.manifest is not None or self.memo(
             "layer-declaration", lambda: layer_declaration(self.model, self.names)) is not None
 

@@ -26,8 +26,8 @@ from .engine_options import EngineOptions, RuleSelection
 from .report.findings import FmuReport, Report, Violation, evidence
 from .fmu import ArchiveLimits, open_fmu
 from .heap import RELEASE_FROM, release_freed_memory
-from .layer import skip_reason
-from .manifest import MANIFEST
+from .model.layer import skip_reason
+from .model.manifest import MANIFEST
 from .reading import RunState, read_manifest_file, read_model, read_xml
 from .schemas import (
     BUILD_DESCRIPTION_FILE,

@@ -12,14 +12,14 @@ from typing import Sequence
 
 from .background import Background
 from .collector import Collector
-from .drafts.detect import UNKNOWN, detect_draft, unrecognised_violations
-from .drafts.migrate import legacy_violations
+from .model.drafts.detect import UNKNOWN, detect_draft, unrecognised_violations
+from .model.drafts.migrate import legacy_violations
 from .engine_options import EngineOptions
 from .report.findings import Location, Violation, evidence
 from .fmu import ArchiveReadError
-from .layer import manifest_missing
-from .manifest import MANIFEST, Manifest, read_manifest
-from .model import MODEL_DESCRIPTION, ModelDescription, read_model_description
+from .model.layer import manifest_missing
+from .model.manifest import MANIFEST, Manifest, read_manifest
+from .model.description import MODEL_DESCRIPTION, ModelDescription, read_model_description
 from .schemas import validate_manifest, validate_model_description
 from .source_texts import SourceTexts
 from .xmlsafe import parse_xml

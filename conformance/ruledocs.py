@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 from .report.catalogue import Catalogue, RuleSpec
-from .drafts.names import DRAFT_LABELS
+from .model.drafts.names import DRAFT_LABELS
 
 HEADER = """# lsdae rules
 

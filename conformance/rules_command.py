@@ -5,7 +5,7 @@ import argparse
 import sys
 
 from .report.catalogue import Catalogue, RuleSpec, default_catalogue
-from .drafts.names import DRAFT_LABELS
+from .model.drafts.names import DRAFT_LABELS
 from .exit_codes import EXIT_OK, UsageError
 from .ruledocs import render_markdown
 

@@ -23,7 +23,7 @@ from pathlib import Path
 
 from lxml import etree
 
-from .drafts.detect import ALPHA1, ATTRIBUTES_ONLY, FLAT_INDEX, FORMULATION, LS_DAE_ROOT
+from .model.drafts.detect import ALPHA1, ATTRIBUTES_ONLY, FLAT_INDEX, FORMULATION, LS_DAE_ROOT
 from .report.paths import schemas_dir
 
 log = logging.getLogger(__name__)
@@ -124,7 +124,7 @@ def build_description_schema() -> etree.XMLSchema:
 
 @functools.lru_cache(maxsize=None)
 def manifest_schema(draft: str) -> etree.XMLSchema:
-    """Our XSD for a draft id of :mod:`conformance.drafts.detect`, loaded once per process."""
+    """Our XSD for a draft id of :mod:`conformance.model.drafts.detect`, loaded once per process."""
     try:
         name = SCHEMA_FILES[draft]
     except KeyError:

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import re
 
-from .drafts.detect import LS_NAMESPACE
+from .model.drafts.detect import LS_NAMESPACE
 
 _XSI_NAMESPACE = "http://www.w3.org/2001/XMLSchema-instance"
 _PREFIXES = {LS_NAMESPACE: "fmi-ls", _XSI_NAMESPACE: "xsi"}

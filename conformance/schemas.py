@@ -23,7 +23,7 @@ from typing import Iterator, Union
 
 from lxml import etree
 
-from .drafts.detect import (
+from .model.drafts.detect import (
     ALPHA1,
     ATTRIBUTES_ONLY,
     DRAFT_LABELS,
@@ -33,7 +33,7 @@ from .drafts.detect import (
     LS_DAE_ROOT,
     LS_NAMESPACE,
 )
-from .drafts.elements import all_elements, written_name
+from .model.drafts.elements import all_elements, written_name
 from .report.findings import Location, Violation, evidence
 from .schema_loader import (
     BUILD_DESCRIPTION_XSD,

@@ -20,7 +20,7 @@ from .report.catalogue import Catalogue, default_catalogue
 from .engine import EngineOptions, check_fmu
 from .report.findings import thaw
 from .fmu import MODEL_DESCRIPTION, ArchiveReadError, open_fmu
-from .model import ModelDescription, read_model_description
+from .model.description import ModelDescription, read_model_description
 from .xmlsafe import parse_xml
 
 

@@ -21,7 +21,7 @@ from dataclasses import replace
 
 from lxml import etree
 
-from conformance.drafts.detect import LS_NAMESPACE
+from conformance.model.drafts.detect import LS_NAMESPACE
 from conformance.report.findings import Location, Violation, evidence
 from conformance.xml_encoding import ENCODING, encoding_violations
 

@@ -19,9 +19,9 @@ from operator import attrgetter, is_not
 
 from ..context import Check, CheckContext
 from ..report.findings import Location, Violation, evidence
-from ..manifest import Manifest, VrRef
-from ..model import FLOAT_TYPES, ModelDescription, Variable
-from ..unknowns import parse_uint
+from ..model.manifest import Manifest, VrRef
+from ..model.description import FLOAT_TYPES, ModelDescription, Variable
+from ..model.unknowns import parse_uint
 from .listing import (
     Problems,
     classified,

@@ -19,8 +19,8 @@ from typing import NamedTuple
 
 from ..context import Check, CheckContext
 from ..report.findings import Location, Violation, evidence
-from ..manifest import Manifest
-from ..model import ModelDescription
+from ..model.manifest import Manifest
+from ..model.description import ModelDescription
 from .algebraic import element_count
 
 

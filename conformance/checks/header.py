@@ -9,9 +9,9 @@ import re
 from typing import Iterator
 
 from ..context import CheckContext
-from ..drafts.detect import ALPHA1, ALPHA1_DESCRIPTION, ALPHA1_NAME, ALPHA1_VERSION
+from ..model.drafts.detect import ALPHA1, ALPHA1_DESCRIPTION, ALPHA1_NAME, ALPHA1_VERSION
 from ..report.findings import Location, Violation, evidence
-from ..manifest import MANIFEST, Manifest
+from ..model.manifest import MANIFEST, Manifest
 
 MANIFEST_FILE = "fmi-ls-manifest.xml"
 

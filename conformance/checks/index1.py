@@ -18,9 +18,9 @@ from typing import TYPE_CHECKING, Iterable, Iterator, Sequence
 
 from ..context import Check, CheckContext
 from ..report.findings import Location, Violation, evidence
-from ..manifest import VrRef
-from ..model import ModelDescription, Variable
-from ..unknowns import Unknown
+from ..model.manifest import VrRef
+from ..model.description import ModelDescription, Variable
+from ..model.unknowns import Unknown
 from .listing import Resolution, resolution
 from .model_analysis import analyse
 

@@ -15,10 +15,10 @@ from operator import attrgetter
 from typing import Iterator
 
 from ..context import Check, CheckContext
-from ..drafts.detect import FORMULATION, LS_DAE_ROOT
+from ..model.drafts.detect import FORMULATION, LS_DAE_ROOT
 from ..report.findings import Location, Violation, evidence
-from ..model import FLOAT_TYPES, ModelDescription, Variable
-from ..unknowns import Unknown
+from ..model.description import FLOAT_TYPES, ModelDescription, Variable
+from ..model.unknowns import Unknown
 from .dae_roles import DaeRoles, describe, roles_of
 
 log = logging.getLogger(__name__)

@@ -14,8 +14,8 @@ from typing import Optional
 
 from ..context import CheckContext
 from ..report.findings import Location
-from ..model import FLOAT_TYPES, ModelDescription, Variable, VariableDetails
-from ..unknowns import Unknown
+from ..model.description import FLOAT_TYPES, ModelDescription, Variable, VariableDetails
+from ..model.unknowns import Unknown
 
 CAUSALITIES = frozenset({"structuralParameter", "parameter", "calculatedParameter", "input",
                          "output", "local", "independent"})

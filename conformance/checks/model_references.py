@@ -19,7 +19,7 @@ from operator import attrgetter
 
 from ..context import Check, CheckContext
 from ..report.findings import Location, Violation, evidence
-from ..model import Dimension, ModelDescription, Variable
+from ..model.description import Dimension, ModelDescription, Variable
 from .model_analysis import analyse, enable_vrs, unknown_loc, var_loc
 
 

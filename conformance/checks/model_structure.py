@@ -15,8 +15,8 @@ from operator import attrgetter, is_not, itemgetter
 
 from ..context import Check, CheckContext
 from ..report.findings import Location, Violation, evidence
-from ..model import ModelDescription, Variable
-from ..unknowns import Unknown
+from ..model.description import ModelDescription, Variable
+from ..model.unknowns import Unknown
 from .model_analysis import analyse, unknown_loc, var_loc
 
 

@@ -19,8 +19,8 @@ from typing import Iterator
 
 from ..context import Check, CheckContext
 from ..report.findings import Location, Violation, evidence
-from ..model import FLOAT_TYPES, Variable
-from ..unknowns import Unknown
+from ..model.description import FLOAT_TYPES, Variable
+from ..model.unknowns import Unknown
 from .model_analysis import (
     ALLOWED_VARIABILITY,
     allowed_initial,

@@ -24,8 +24,8 @@ from typing import Any, Callable, Iterable, Mapping, Sequence
 import numpy as np
 
 from ..report.findings import Violation
-from ..manifest import Manifest
-from ..model import ModelDescription
+from ..model.manifest import Manifest
+from ..model.description import ModelDescription
 from ..runtime.errors import FmiError, Unavailable
 from ..runtime.point import Evaluator, Point
 

@@ -12,7 +12,7 @@ from typing import Any, Iterator, Sequence
 import numpy as np
 
 from ..report.findings import Location
-from ..model import MODEL_DESCRIPTION
+from ..model.description import MODEL_DESCRIPTION
 from .api import FmiError, ProbeContext, ProbeSkipped
 from ..runtime.instance import Instance
 from ..runtime.layout import Layout

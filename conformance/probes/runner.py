@@ -42,8 +42,8 @@ from typing import Any, Iterable, Sequence
 
 from ..report.catalogue import RuleSpec, default_catalogue
 from ..report.findings import Violation
-from ..layer import NOT_A_DAE_FMU
-from ..manifest import MANIFEST
+from ..model.layer import NOT_A_DAE_FMU
+from ..model.manifest import MANIFEST
 from ..runtime.host import host_platform_tuple, library_extension
 from .driver import RUNNER_RULES, Driver
 from .registry import ENDURANCE, FAMILY_OF

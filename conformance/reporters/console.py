@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 from ..report.catalogue import Catalogue
-from ..drafts.names import DRAFT_LABELS
+from ..model.drafts.names import DRAFT_LABELS
 from ..report.findings import Finding, FmuReport, Report, Severity, thaw
 
 _COLOURS = {Severity.ERROR: "\033[1;31m", Severity.WARNING: "\033[1;33m",

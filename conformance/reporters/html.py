@@ -15,7 +15,7 @@ from html import escape
 from typing import Any, Iterable
 
 from ..report.catalogue import Catalogue
-from ..drafts.names import DRAFT_LABELS
+from ..model.drafts.names import DRAFT_LABELS
 from ..report.findings import Finding, FmuReport, Report, RunInfo, Severity, thaw
 from . import html_plots
 

@@ -6,7 +6,7 @@ import math
 from typing import Any
 
 from ..report.catalogue import Catalogue, default_catalogue
-from ..drafts.names import DRAFT_LABELS
+from ..model.drafts.names import DRAFT_LABELS
 from ..report.findings import Finding, FmuReport, Report, Severity, thaw
 
 SCHEMA_VERSION = 1

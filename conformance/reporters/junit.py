@@ -23,7 +23,7 @@ from datetime import datetime, timezone
 from typing import Any
 
 from ..report.catalogue import Catalogue
-from ..drafts.names import DRAFT_LABELS
+from ..model.drafts.names import DRAFT_LABELS
 from ..report.findings import Finding, FmuReport, Report, RunInfo, Severity
 from .markdown import plural
 from .sarif import is_baselined

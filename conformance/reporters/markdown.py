@@ -13,7 +13,7 @@ import re
 from typing import Any
 
 from ..report.catalogue import Catalogue
-from ..drafts.names import DRAFT_LABELS
+from ..model.drafts.names import DRAFT_LABELS
 from ..report.findings import Finding, FmuReport, Report, RunInfo, Severity
 from .sarif import inner_location, is_baselined
 from .sarif_rules import RULES_DOC_URL, rule_url

@@ -6,8 +6,8 @@ from lxml import etree
 
 from conformance.checks import REGISTRY, algebraic, residual
 from conformance.context import CheckContext
-from conformance.manifest import read_manifest
-from conformance.model import read_model_description
+from conformance.model.manifest import read_manifest
+from conformance.model.description import read_model_description
 
 # The HelloWorldDAE model of draft-shapes.md, plus a few extra variables to point at.
 VARIABLES = """

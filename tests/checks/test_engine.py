@@ -10,7 +10,7 @@ from conformance.report.catalogue import Catalogue, default_catalogue
 from conformance.checks import REGISTRY
 from conformance.engine import EngineOptions, check_fmu
 from conformance.report.findings import Severity, Violation
-from conformance.layer import NOT_A_DAE_FMU
+from conformance.model.layer import NOT_A_DAE_FMU
 from tests.fixturekit import Case, materialise, zip_scene
 
 

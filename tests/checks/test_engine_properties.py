@@ -22,8 +22,8 @@ from hypothesis import strategies as st
 from lxml import etree
 
 from conformance.engine import EngineOptions, check_paths
-from conformance.manifest import MANIFEST
-from conformance.model import MODEL_DESCRIPTION
+from conformance.model.manifest import MANIFEST
+from conformance.model.description import MODEL_DESCRIPTION
 from conformance.reporters import json_report
 from tests.fixturekit import scene_xml
 

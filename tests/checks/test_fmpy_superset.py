@@ -29,8 +29,8 @@ import pytest
 from fmpy.validation import validate_fmu
 
 from conformance.engine import EngineOptions, check_fmu
-from conformance.manifest import MANIFEST
-from conformance.model import MODEL_DESCRIPTION
+from conformance.model.manifest import MANIFEST
+from conformance.model.description import MODEL_DESCRIPTION
 from tests.fixturekit import scene_xml
 
 # fmpy's message pattern -> the lsdae rules that cover that problem class (any one suffices).

@@ -6,8 +6,8 @@ from lxml import etree
 
 from conformance.checks import enable, header
 from conformance.context import CheckContext
-from conformance.manifest import MANIFEST, read_manifest
-from conformance.model import read_model_description
+from conformance.model.manifest import MANIFEST, read_manifest
+from conformance.model.description import read_model_description
 
 NS = 'xmlns:fmi-ls="http://fmi-standard.org/fmi-ls-manifest"'
 NAME = 'fmi-ls:fmi-ls-name="org.fmi-standard.fmi-ls-dae"'

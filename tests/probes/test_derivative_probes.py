@@ -15,8 +15,8 @@ from lxml import etree
 from scipy.optimize import fsolve
 
 from conformance.report.catalogue import default_catalogue
-from conformance.manifest import read_manifest
-from conformance.model import read_model_description
+from conformance.model.manifest import read_manifest
+from conformance.model.description import read_model_description
 from conformance.probes import derivatives as D
 from conformance.probes import dgdw
 from conformance.probes.api import FmiError, Point, ProbeContext, ProbeSkipped

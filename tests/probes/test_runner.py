@@ -12,7 +12,7 @@ import pytest
 from conformance.report.catalogue import Catalogue, default_catalogue
 from conformance.engine import EngineOptions, check_fmu, check_paths
 from conformance.report.findings import Severity
-from conformance.manifest import MANIFEST
+from conformance.model.manifest import MANIFEST
 from conformance.probes import driver, registry, runner
 from conformance.probes.api import Point
 from conformance.probes.registry import PROBES

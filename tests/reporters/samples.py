@@ -26,7 +26,7 @@ from conformance.report.findings import (
     Severity,
     evidence,
 )
-from conformance.layer import NOT_A_DAE_FMU
+from conformance.model.layer import NOT_A_DAE_FMU
 from tests.fixturekit import all_cases, materialise
 
 HERE = Path(__file__).resolve().parent

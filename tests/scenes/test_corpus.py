@@ -22,8 +22,8 @@ from lxml import etree
 from conformance.report.catalogue import default_catalogue
 from conformance.cli import main
 from conformance.engine import EngineOptions, check_fmu
-from conformance.layer import NOT_A_DAE_FMU
-from conformance.manifest import MANIFEST
+from conformance.model.layer import NOT_A_DAE_FMU
+from conformance.model.manifest import MANIFEST
 from conformance.schema_loader import core_schema_dir
 from conformance.schemas import validate_model_description
 from scenes.build import build_scene, corpus_names, scene_xml_dir

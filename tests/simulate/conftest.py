@@ -6,8 +6,8 @@ from pathlib import Path
 
 import pytest
 
-from conformance.manifest import MANIFEST, read_manifest
-from conformance.model import MODEL_DESCRIPTION, read_model_description
+from conformance.model.manifest import MANIFEST, read_manifest
+from conformance.model.description import MODEL_DESCRIPTION, read_model_description
 from conformance.runtime.callrecord import CallRecord
 from conformance.runtime.layout import Layout
 from conformance.runtime.library import Library

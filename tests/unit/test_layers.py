@@ -28,10 +28,10 @@ FLOORS: list[tuple[str, ...]] = [
     ("runtime", "precommit", "context"),
     ("fmu", "archive_source", "archive_scan", "archive_zip", "archive_folder", "archive_inventory",
      "archive_base", "schemas", "schema_loader", "schema_messages", "xmlsafe", "xml_encoding",
-     "element_path", "manifest", "layer", "reporters", "ruledocs", "result_cache",
+     "element_path", "reporters", "ruledocs", "result_cache",
      "source_texts"),
-    ("drafts", "config"),
-    ("numerics", "model", "model_parts", "unknowns", "report", "progress", "process_pool", "background", "heap", "attributes", "definitions", "structured_names",
+    ("model", "config"),
+    ("numerics", "report", "progress", "process_pool", "background", "heap",
      "__init__", "sharding"),
 ]
 

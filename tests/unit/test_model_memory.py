@@ -8,9 +8,9 @@ from lxml import etree
 
 from bench.generate import manifest_xml, model_description_xml
 from conformance import heap
-from conformance.manifest import read_manifest
-from conformance.model import NO_DETAILS, read_model_description
-from conformance.unknowns import Unknown, path_template
+from conformance.model.manifest import read_manifest
+from conformance.model.description import NO_DETAILS, read_model_description
+from conformance.model.unknowns import Unknown, path_template
 
 
 def _read(m: int = 4):

@@ -9,7 +9,7 @@ import pytest
 from lxml import etree
 
 from conformance import schema_loader, schemas
-from conformance.drafts import detect, migrate
+from conformance.model.drafts import detect, migrate
 from conformance.report.findings import Violation
 from conformance.schema_messages import clean_message
 

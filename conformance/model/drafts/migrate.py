@@ -2,7 +2,7 @@
 
 A legacy manifest gives one ``legacy-draft-shape`` warning whose message and evidence carry
 concrete migration hints, naming the value references found in the file; alpha.1 manifests and
-unrecognised roots give none (those are :mod:`conformance.drafts.detect`'s business).
+unrecognised roots give none (those are :mod:`conformance.model.drafts.detect`'s business).
 """
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ from typing import Iterator, Sequence
 
 from lxml import etree
 
-from ..report.findings import Location, Violation, evidence
+from ...report.findings import Location, Violation, evidence
 from .detect import (
     ALPHA1_DESCRIPTION,
     ALPHA1_NAME,

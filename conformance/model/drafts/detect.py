@@ -19,7 +19,7 @@ shared root ``fmiLayeredStandardManifest``, at the form of the residuals: any
 ``index``) mean ``flat-index``; no residuals at all mean ``formulation``, the common case.
 
 A root that is none of the known shapes gives ``draft-unrecognised``; what a legacy shape must
-change is :mod:`conformance.drafts.migrate`'s business.
+change is :mod:`conformance.model.drafts.migrate`'s business.
 """
 from __future__ import annotations
 
@@ -27,7 +27,7 @@ from typing import Iterator
 
 from lxml import etree
 
-from ..report.findings import Location, Violation, evidence
+from ...report.findings import Location, Violation, evidence
 from .elements import children_named, residual_elements, written_name
 from .names import (  # noqa: F401  (re-exported: the draft names belong with recognition)
     ALL_DRAFTS, ALPHA1, ALPHA1_DESCRIPTION, ALPHA1_NAME, ALPHA1_VERSION, ATTRIBUTES_ONLY, AUTO,

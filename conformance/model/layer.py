@@ -16,9 +16,9 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Mapping, Sequence
 
-from .report.findings import Location, Violation, evidence
+from ..report.findings import Location, Violation, evidence
 from .manifest import MANIFEST
-from .model import ModelDescription
+from .description import ModelDescription
 
 LAYER_FOLDER = "extra/org.fmi-standard.fmi-ls-dae/"
 ENABLE_PARAMETER_NAMES = frozenset({"enableDAEModeParameter", "enableDAEModeVariable",

@@ -1,10 +1,10 @@
-"""Reading modelDescription.xml into its parts (:mod:`conformance.model_parts`), with source lines.
+"""Reading modelDescription.xml into its parts (:mod:`conformance.model.parts`), with source lines.
 
 Parsing is lenient: whatever the XSD says about a document, we build as much of the model as we
 can, so the semantic rules still run and report. Values that are missing or malformed become
 ``None`` (the schema stage reports them). Defaults from the FMI 3.0 prose (MV-11, MV-20) are
 applied here once, so every check sees the effective causality, variability and initial. The
-ModelStructure elements are :class:`~conformance.unknowns.Unknown`, as in the manifest.
+ModelStructure elements are :class:`~conformance.model.unknowns.Unknown`, as in the manifest.
 """
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ from operator import itemgetter
 from lxml import etree
 
 from .definitions import read_definitions
-from .model_parts import (  # noqa: F401  (the model's parts, read here, imported from here)
+from .parts import (  # noqa: F401  (the model's parts, read here, imported from here)
     FLOAT_TYPES, MODEL_DESCRIPTION, NO_DETAILS, STRUCTURE_KINDS, VARIABLE_TYPES,
     DefaultExperiment, Dimension, ModelDescription, ModelExchange, Variable, VariableDetails,
     default_initial, default_variability,

@@ -1,7 +1,7 @@
 """The fmi-ls-dae drafts by name: ids, labels, the namespace, the ``--draft`` option.
 
 Plain constants, no XML: the command line and ``lsdae rules`` read them without loading lxml.
-How a manifest is recognised as one of them is :mod:`conformance.drafts.detect`'s business.
+How a manifest is recognised as one of them is :mod:`conformance.model.drafts.detect`'s business.
 """
 from __future__ import annotations
 

@@ -1,9 +1,9 @@
 """The fmi-ls-dae manifest as a frozen dataclass, read from any draft shape.
 
-Every shape in the wild (see conformance/drafts/) is normalised into one :class:`Manifest`:
+Every shape in the wild (see conformance/model/drafts/) is normalised into one :class:`Manifest`:
 element names are compared by local name, so namespaced legacy manifests read the same as
 alpha.1 ones; a legacy ``<Residual><Formulation .../></Residual>`` becomes a Residual
-:class:`~conformance.unknowns.Unknown` whose ``formulations`` counts the Formulation children.
+:class:`~conformance.model.unknowns.Unknown` whose ``formulations`` counts the Formulation children.
 The shape itself is reported by the draft rules; the semantic rules then run on this model.
 """
 from __future__ import annotations
@@ -26,7 +26,7 @@ class VrRef(NamedTuple):
     """A manifest element that points at a variable: enable parameter or algebraic variable.
 
     ``path`` is built on demand from ``where`` and ``ordinal``, as for
-    :class:`~conformance.unknowns.Unknown` (a manifest may list 125k algebraic variables).
+    :class:`~conformance.model.unknowns.Unknown` (a manifest may list 125k algebraic variables).
     """
 
     vr: int | None

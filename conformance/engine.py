@@ -24,12 +24,12 @@ from .collector import Collector
 from .context import CheckContext
 from .engine_options import EngineOptions, RuleSelection
 from .report.findings import FmuReport, Report, Violation, evidence
-from .fmu import ArchiveLimits, open_fmu
+from .intake.fmu import ArchiveLimits, open_fmu
 from .heap import RELEASE_FROM, release_freed_memory
 from .model.layer import skip_reason
 from .model.manifest import MANIFEST
 from .reading import RunState, read_manifest_file, read_model, read_xml
-from .schemas import (
+from .intake.schemas import (
     BUILD_DESCRIPTION_FILE,
     validate_build_description,
 )

@@ -32,7 +32,7 @@ from .report.findings import FmuReport, Report
 from .fixes.apply import ALL, Outcome, fix, key
 from .fixes.archive import Package
 from .fixes.fixers import UNSAFE_FIXERS
-from .fmu import default_limits
+from .intake.fmu import default_limits
 from .precommit import fmu_roots
 from .reporters import console
 

@@ -19,9 +19,9 @@ from typing import Any
 from .report.catalogue import Catalogue, default_catalogue
 from .engine import EngineOptions, check_fmu
 from .report.findings import thaw
-from .fmu import MODEL_DESCRIPTION, ArchiveReadError, open_fmu
+from .intake.fmu import MODEL_DESCRIPTION, ArchiveReadError, open_fmu
 from .model.description import ModelDescription, read_model_description
-from .xmlsafe import parse_xml
+from .intake.xmlsafe import parse_xml
 
 
 RULES_BY_MODE = {"dae": ("DAE801", "DAE802", "DAE803", "DAE804"),

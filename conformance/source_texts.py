@@ -12,7 +12,7 @@ import logging
 from pathlib import Path
 from typing import Callable
 
-from .fmu import ArchiveLimits, open_fmu
+from .intake.fmu import ArchiveLimits, open_fmu
 
 log = logging.getLogger(__name__)
 

@@ -15,7 +15,7 @@ from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..archive_base import TOO_LARGE, UNREADABLE, UNSAFE_PATH
+from ..intake.archive.base import TOO_LARGE, UNREADABLE, UNSAFE_PATH
 from ..report.findings import Finding, FmuReport
 from .archive import Package, PackageError
 from .change import Change, NoFix

@@ -20,7 +20,7 @@ from ..model.drafts.detect import ATTRIBUTES_ONLY, LEGACY_DRAFTS, LS_NAMESPACE
 from ..model.drafts.migrate import MODEL_STRUCTURE_ORDER
 from ..report.findings import Finding
 from ..model.description import MODEL_DESCRIPTION
-from ..xmlsafe import parse_xml
+from ..intake.xmlsafe import parse_xml
 from .archive import Package
 from .change import Change, NoFix
 from .edits import Edit, apply_edits

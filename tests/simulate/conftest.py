@@ -11,7 +11,7 @@ from conformance.model.description import MODEL_DESCRIPTION, read_model_descript
 from conformance.runtime.callrecord import CallRecord
 from conformance.runtime.layout import Layout
 from conformance.runtime.library import Library
-from conformance.xmlsafe import parse_xml
+from conformance.intake.xmlsafe import parse_xml
 from scenes.build import build_scene
 
 

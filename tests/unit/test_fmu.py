@@ -16,7 +16,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from conformance.report.catalogue import load_catalogue
-from conformance.fmu import (
+from conformance.intake.fmu import (
     MANIFEST,
     MODEL_DESCRIPTION,
     ArchiveLimits,

@@ -5,7 +5,7 @@ import zipfile
 
 from conformance import source_texts
 from conformance.engine import EngineOptions, check_fmu
-from conformance.fmu import default_limits
+from conformance.intake.fmu import default_limits
 from conformance.source_texts import SourceTexts
 from scenes.build import build_scene
 

@@ -2,7 +2,7 @@
 
 Both use lxml (libxml2): it validates an 18 MB modelDescription in a fraction of a second,
 and its error log gives a line and an XPath for every error, which is all a finding needs. The
-schemas are located and loaded, offline, by :mod:`conformance.schema_loader`: the FMI 3.0 core
+schemas are located and loaded, offline, by :mod:`conformance.intake.schema_loader`: the FMI 3.0 core
 schema from the installed fmpy, ours from ``schemas/`` (one per draft).
 
 Legacy manifests may put their elements in the layered-standard namespace (as default namespace or
@@ -11,7 +11,7 @@ only; :func:`validate_manifest` validates a copy in which elements of that names
 no namespace (attributes untouched), so one schema covers every namespace variant of a draft.
 The 1.0.0-alpha.1 manifest is validated as it is: its elements must be in no namespace.
 
-Messages are libxml2's, tidied by :mod:`conformance.schema_messages`. A follow-up error on an
+Messages are libxml2's, tidied by :mod:`conformance.intake.schema_messages`. A follow-up error on an
 attribute that already has an error (libxml2 reports a bad list value twice, once for the item
 and once for the list) is dropped.
 """
@@ -23,7 +23,7 @@ from typing import Iterator, Union
 
 from lxml import etree
 
-from .model.drafts.detect import (
+from ..model.drafts.detect import (
     ALPHA1,
     ATTRIBUTES_ONLY,
     DRAFT_LABELS,
@@ -33,8 +33,8 @@ from .model.drafts.detect import (
     LS_DAE_ROOT,
     LS_NAMESPACE,
 )
-from .model.drafts.elements import all_elements, written_name
-from .report.findings import Location, Violation, evidence
+from ..model.drafts.elements import all_elements, written_name
+from ..report.findings import Location, Violation, evidence
 from .schema_loader import (
     BUILD_DESCRIPTION_XSD,
     MODEL_DESCRIPTION_XSD,

@@ -9,7 +9,7 @@ import stat
 import zipfile
 from pathlib import Path
 
-from conformance.archive_base import (
+from conformance.intake.archive.base import (
     COMPRESSION,
     TOO_LARGE,
     UNREADABLE,
@@ -21,7 +21,7 @@ from conformance.archive_base import (
     show_name,
     unsafe_reason,
 )
-from conformance.archive_inventory import Inventory, ScanResult, too_many, unusable
+from conformance.intake.archive.inventory import Inventory, ScanResult, too_many, unusable
 
 _ALLOWED_METHODS = (zipfile.ZIP_STORED, zipfile.ZIP_DEFLATED)
 _DECODABLE_METHODS = (zipfile.ZIP_STORED, zipfile.ZIP_DEFLATED, zipfile.ZIP_BZIP2, zipfile.ZIP_LZMA)

@@ -1,8 +1,8 @@
 """What listing and reading an FMU share: pseudo-rule names, limits, members, entry names.
 
-:mod:`conformance.archive_scan` lists the entries and :mod:`conformance.archive_source` reads
+:mod:`conformance.intake.archive.scan` lists the entries and :mod:`conformance.intake.archive.source` reads
 them; both import this module and it imports neither, so there is no import cycle. The rule names
-and :class:`ArchiveLimits` are re-exported by :mod:`conformance.fmu`; callers import them from
+and :class:`ArchiveLimits` are re-exported by :mod:`conformance.intake.fmu`; callers import them from
 there.
 """
 from __future__ import annotations
@@ -32,7 +32,7 @@ class ArchiveLimits:
     """Bounds on what reading an FMU may cost; the catalogue options of ``archive-too-large``.
 
     No defaults here: the catalogue is the one place they are written
-    (:func:`conformance.fmu.default_limits` reads them).
+    (:func:`conformance.intake.fmu.default_limits` reads them).
     """
 
     max_total_uncompressed: int

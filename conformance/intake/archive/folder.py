@@ -10,7 +10,7 @@ import os
 import stat
 from pathlib import Path
 
-from conformance.archive_base import (
+from conformance.intake.archive.base import (
     UNREADABLE,
     UNSAFE_PATH,
     ArchiveLimits,
@@ -20,7 +20,7 @@ from conformance.archive_base import (
     show_name,
     unsafe_reason,
 )
-from conformance.archive_inventory import Inventory, ScanResult, too_many, unusable
+from conformance.intake.archive.inventory import Inventory, ScanResult, too_many, unusable
 
 log = logging.getLogger(__name__)
 

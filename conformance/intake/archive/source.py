@@ -1,6 +1,6 @@
 """An opened FMU: its safe members, read and extracted with bounded cost (:class:`FmuSource`).
 
-:func:`conformance.fmu.open_fmu` builds it from what :mod:`conformance.archive_scan` listed.
+:func:`conformance.intake.fmu.open_fmu` builds it from what :mod:`conformance.intake.archive.scan` listed.
 Every read counts the bytes actually decompressed and stops at the limit; a member that cannot
 be read raises :class:`ArchiveReadError`, whose violation names the rule. Nothing is written
 anywhere except by :meth:`FmuSource.extract_to`, and only into a private temporary directory.
@@ -15,7 +15,7 @@ import zipfile
 from pathlib import Path
 from typing import IO, Any, Callable, Iterable, Mapping
 
-from conformance.archive_base import (
+from conformance.intake.archive.base import (
     TOO_LARGE,
     UNREADABLE,
     ArchiveLimits,

@@ -1,7 +1,7 @@
 """What listing an FMU builds up, ZIP archive or folder alike: the inventory and its result.
 
 :class:`Inventory` collects the usable members, the excluded entries and the violations about
-them while :mod:`conformance.archive_zip` or :mod:`conformance.archive_folder` walks the entries;
+them while :mod:`conformance.intake.archive.zipped` or :mod:`conformance.intake.archive.folder` walks the entries;
 :meth:`Inventory.finish` adds the checks that need the whole listing (names that differ only in
 letter case, a name that is both a file and a folder, the total size).
 """
@@ -11,7 +11,7 @@ import zipfile
 from dataclasses import dataclass
 from typing import Any
 
-from conformance.archive_base import (
+from conformance.intake.archive.base import (
     DUPLICATE,
     TOO_LARGE,
     ArchiveLimits,
@@ -25,10 +25,10 @@ from conformance.report.findings import Location, Violation, evidence
 
 @dataclass(slots=True)
 class ScanResult:
-    """What :func:`~conformance.archive_scan.scan` found; ``kind`` is None when nothing is usable.
+    """What :func:`~conformance.intake.archive.scan.scan` found; ``kind`` is None when nothing is usable.
 
     For a ZIP archive ``zf`` is the open archive, which the caller must close (an
-    :class:`~conformance.archive_source.FmuSource` takes it over); for a folder ``root`` is its
+    :class:`~conformance.intake.archive.source.FmuSource` takes it over); for a folder ``root`` is its
     real path.
     """
 

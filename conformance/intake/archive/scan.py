@@ -2,10 +2,10 @@
 
 :func:`scan` looks at every entry's name, type and declared size before anything is read, and
 sorts the entries into usable members and excluded ones, with a violation for each problem (see
-:mod:`conformance.fmu` for the pseudo-rules). It reads no member data: :mod:`conformance.fmu`
-builds the ``FmuSource`` (:mod:`conformance.archive_source`) from the :class:`ScanResult`, which
+:mod:`conformance.intake.fmu` for the pseudo-rules). It reads no member data: :mod:`conformance.intake.fmu`
+builds the ``FmuSource`` (:mod:`conformance.intake.archive.source`) from the :class:`ScanResult`, which
 reads, bounded by the same limits. This module tells a folder from a ZIP archive; the listing
-itself is in :mod:`conformance.archive_zip` and :mod:`conformance.archive_folder`.
+itself is in :mod:`conformance.intake.archive.zipped` and :mod:`conformance.intake.archive.folder`.
 """
 from __future__ import annotations
 
@@ -13,16 +13,16 @@ import os
 import stat
 from pathlib import Path
 
-from conformance.archive_base import UNREADABLE, ArchiveLimits, archive_violation, describe_error
-from conformance.archive_folder import scan_folder
-from conformance.archive_inventory import ScanResult, unusable
-from conformance.archive_zip import scan_zip
+from conformance.intake.archive.base import UNREADABLE, ArchiveLimits, archive_violation, describe_error
+from conformance.intake.archive.folder import scan_folder
+from conformance.intake.archive.inventory import ScanResult, unusable
+from conformance.intake.archive.zipped import scan_zip
 
 
 def scan(path: Path, limits: ArchiveLimits) -> ScanResult:
     """List an FMU (a ZIP archive, whatever its extension, or an unpacked folder).
 
-    Raises only for unexpected failures, which :func:`conformance.fmu.open_fmu` turns into a
+    Raises only for unexpected failures, which :func:`conformance.intake.fmu.open_fmu` turns into a
     violation; everything the FMU itself gets wrong comes back as violations.
     """
     try:

@@ -2,7 +2,7 @@
 wide encoding without one, and the encoding its XML declaration states.
 
 :func:`encoding_violations` reports the ``xml-encoding`` pseudo-rule for
-:func:`conformance.xmlsafe.parse_xml`; it reads only the first bytes of the document.
+:func:`conformance.intake.xmlsafe.parse_xml`; it reads only the first bytes of the document.
 """
 from __future__ import annotations
 

@@ -6,7 +6,7 @@ pseudo-rule: unsafe paths and links (``unsafe-archive-path``), entries that shar
 or entries that cannot be read (``archive-unreadable``) and compression methods FMI does not
 allow (``archive-compression-method``). Unsafe, oversized and undecodable entries are left out of
 :meth:`FmuSource.names`; everything else stays usable so the check goes on. The listing itself
-lives in :mod:`conformance.archive_scan`, the reading in :mod:`conformance.archive_source`; this
+lives in :mod:`conformance.intake.archive.scan`, the reading in :mod:`conformance.intake.archive.source`; this
 module is the public API.
 
 Reading is bounded twice: declared sizes are checked when the archive is opened, and every read
@@ -18,7 +18,7 @@ from __future__ import annotations
 import logging
 from pathlib import Path
 
-from conformance.archive_base import (
+from conformance.intake.archive.base import (
     COMPRESSION,
     DUPLICATE,
     TOO_LARGE,
@@ -30,8 +30,8 @@ from conformance.archive_base import (
     archive_violation,
     describe_error,
 )
-from conformance.archive_scan import scan
-from conformance.archive_source import ArchiveReadError, FmuSource
+from conformance.intake.archive.scan import scan
+from conformance.intake.archive.source import ArchiveReadError, FmuSource
 from conformance.report.catalogue import default_catalogue
 from conformance.report.findings import Violation
 

@@ -2,14 +2,14 @@
 
 Clark names ``{uri}local`` become ``fmi-ls:local``, enumeration sets are spelled out without
 braces, and the ``Expected is ( .. )`` phrasing is made readable. :func:`attribute_of` names the
-attribute a message is about, so that :mod:`conformance.schemas` can drop a follow-up error on an
+attribute a message is about, so that :mod:`conformance.intake.schemas` can drop a follow-up error on an
 attribute that already has one.
 """
 from __future__ import annotations
 
 import re
 
-from .model.drafts.detect import LS_NAMESPACE
+from ..model.drafts.detect import LS_NAMESPACE
 
 _XSI_NAMESPACE = "http://www.w3.org/2001/XMLSchema-instance"
 _PREFIXES = {LS_NAMESPACE: "fmi-ls", _XSI_NAMESPACE: "xsi"}

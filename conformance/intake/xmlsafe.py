@@ -10,7 +10,7 @@ of these pseudo-rules
   external DTD. Other importers would expand or fetch what lsdae ignores, so the content cannot be
   trusted and no tree is returned.
 - ``xml-encoding``: the document is not UTF-8 (FMI requires UTF-8), or, on request, its XML
-  declaration does not state the encoding (AR-04); :mod:`conformance.xml_encoding` tells.
+  declaration does not state the encoding (AR-04); :mod:`conformance.intake.xml_encoding` tells.
 """
 from __future__ import annotations
 
@@ -23,7 +23,7 @@ from lxml import etree
 
 from conformance.model.drafts.detect import LS_NAMESPACE
 from conformance.report.findings import Location, Violation, evidence
-from conformance.xml_encoding import ENCODING, encoding_violations
+from conformance.intake.xml_encoding import ENCODING, encoding_violations
 
 log = logging.getLogger(__name__)
 

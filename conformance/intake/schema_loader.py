@@ -11,7 +11,7 @@ Where the schemas come from:
 
 Loading never touches the network: every schema document is parsed with ``no_network=True`` and a
 resolver that raises :class:`SchemaLoadError` for any http(s)/ftp location instead of fetching it.
-:mod:`conformance.schemas` validates with what is loaded here.
+:mod:`conformance.intake.schemas` validates with what is loaded here.
 """
 from __future__ import annotations
 
@@ -23,8 +23,8 @@ from pathlib import Path
 
 from lxml import etree
 
-from .model.drafts.detect import ALPHA1, ATTRIBUTES_ONLY, FLAT_INDEX, FORMULATION, LS_DAE_ROOT
-from .report.paths import schemas_dir
+from ..model.drafts.detect import ALPHA1, ATTRIBUTES_ONLY, FLAT_INDEX, FORMULATION, LS_DAE_ROOT
+from ..report.paths import schemas_dir
 
 log = logging.getLogger(__name__)
 

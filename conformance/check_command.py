@@ -23,13 +23,13 @@ from .report.baseline import load as load_baseline
 from .report.baseline import write as write_baseline
 from .report.catalogue import Catalogue, default_catalogue, with_options
 from .config import ConfigError, load_config
-from .engine import EngineOptions
+from .run.engine import EngineOptions
 from .exit_codes import EXIT_FINDINGS, EXIT_INTERRUPTED, EXIT_OK, EXIT_USAGE, UsageError
 from .report.findings import Report, RunInfo, Severity
-from .fleet import plan as fleet_plan
-from .parallel import check_all
+from .run.fleet import plan as fleet_plan
+from .run.parallel import check_all
 from .precommit import fmu_roots
-from .progress import make_progress
+from .run.progress import make_progress
 from .reporters import REPORTER_BY_NAME
 
 
@@ -166,7 +166,7 @@ def cmd_check(args: argparse.Namespace) -> int:
     baseline = None if args.shard else _read_baseline(settings, args)  # merge applies it
     durations: dict[str, float] = {}
     started = datetime.now(timezone.utc).replace(microsecond=0).isoformat()
-    try:  # --shard and --cache-dir: which FMUs this run checks (conformance/fleet.py)
+    try:  # --shard and --cache-dir: which FMUs this run checks (conformance/run/fleet.py)
         fleet = fleet_plan(args.paths, shard=args.shard, cache_dir=args.cache_dir,
                            options=options, catalogue=catalogue,
                            rule_options=rule_options(args, config))

@@ -25,8 +25,8 @@ from . import __version__
 from .arguments import add_fix_parser as add_parser  # noqa: F401  (the command's grammar)
 from .report.catalogue import default_catalogue
 from .check_command import exit_code
-from .engine import check_fmu
-from .engine_options import EngineOptions, RuleSelection
+from .run.engine import check_fmu
+from .run.options import EngineOptions, RuleSelection
 from .exit_codes import EXIT_FINDINGS, EXIT_OK, UsageError
 from .report.findings import FmuReport, Report
 from .fixes.apply import ALL, Outcome, fix, key

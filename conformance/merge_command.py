@@ -147,7 +147,7 @@ def _join(shards: list[_Shard]) -> tuple[Report, dict[str, Any], dict[str, float
 
 
 def _same_catalogue(catalogue: Catalogue, shards: list[_Shard]) -> None:
-    from .fleet import catalogue_fingerprint  # lazy: fleet imports the result cache's writer
+    from .run.fleet import catalogue_fingerprint  # lazy: fleet imports the result cache's writer
 
     if catalogue_fingerprint(catalogue) != shards[0].info.get("catalogue"):
         raise UsageError(f"{shards[0].label} was checked with another rule catalogue than this "

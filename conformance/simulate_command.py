@@ -31,7 +31,7 @@ from .report.catalogue import default_catalogue
 from .exit_codes import EXIT_FINDINGS, EXIT_OK, EXIT_USAGE
 from .report.findings import Report, Severity
 from .reporters import REPORTER_BY_NAME
-from .simulate_fmu import (RULES_BY_MODE, Simulation, default_experiment, read_model,
+from .run.simulate_fmu import (RULES_BY_MODE, Simulation, default_experiment, read_model,
                            simulate_fmu, start_values)
 
 __all__ = ["Simulation", "add_parser", "run", "simulate_fmu", "summary"]

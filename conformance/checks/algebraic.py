@@ -17,7 +17,7 @@ from collections.abc import Iterator, Sequence
 from itertools import repeat
 from operator import attrgetter, is_not
 
-from ..context import Check, CheckContext
+from .context import Check, CheckContext
 from ..report.findings import Location, Violation, evidence
 from ..model.manifest import Manifest, VrRef
 from ..model.description import FLOAT_TYPES, ModelDescription, Variable

@@ -18,7 +18,7 @@ from ..model.attributes import (
     Problem,
     attribute_problems,
 )
-from ..context import Check, CheckContext
+from .context import Check, CheckContext
 from ..report.findings import Violation, evidence
 from ..model.description import FLOAT_TYPES, ModelDescription, Variable, VariableDetails
 from .model_analysis import analyse, var_loc

@@ -9,7 +9,7 @@ from collections.abc import Iterable
 from dataclasses import dataclass
 from operator import attrgetter
 
-from ..context import CheckContext
+from .context import CheckContext
 from ..model.manifest import Manifest, VrRef
 from ..model.description import ModelDescription, Variable
 from ..model.unknowns import Unknown

@@ -13,7 +13,7 @@ from __future__ import annotations
 from operator import attrgetter
 from typing import Iterator
 
-from ..context import CheckContext
+from .context import CheckContext
 from ..report.findings import Location, Violation, evidence
 from ..model.manifest import VrRef
 from ..model.description import Variable

@@ -8,7 +8,7 @@ from __future__ import annotations
 import re
 from typing import Iterator
 
-from ..context import CheckContext
+from .context import CheckContext
 from ..model.drafts.detect import ALPHA1, ALPHA1_DESCRIPTION, ALPHA1_NAME, ALPHA1_VERSION
 from ..report.findings import Location, Violation, evidence
 from ..model.manifest import MANIFEST, Manifest

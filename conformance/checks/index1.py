@@ -16,7 +16,7 @@ from math import prod
 from operator import attrgetter
 from typing import TYPE_CHECKING, Iterable, Iterator, Sequence
 
-from ..context import Check, CheckContext
+from .context import Check, CheckContext
 from ..report.findings import Location, Violation, evidence
 from ..model.manifest import VrRef
 from ..model.description import ModelDescription, Variable

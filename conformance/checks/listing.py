@@ -11,7 +11,7 @@ from itertools import compress
 from operator import attrgetter
 from typing import Callable, Iterator, NamedTuple, Sequence, TypeVar
 
-from ..context import CheckContext
+from .context import CheckContext
 from ..model.manifest import VrRef
 from ..model.description import Variable
 from ..model.unknowns import Unknown

@@ -14,7 +14,7 @@ from itertools import chain
 from operator import attrgetter
 from typing import Iterator
 
-from ..context import Check, CheckContext
+from .context import Check, CheckContext
 from ..model.drafts.detect import FORMULATION, LS_DAE_ROOT
 from ..report.findings import Location, Violation, evidence
 from ..model.description import FLOAT_TYPES, ModelDescription, Variable

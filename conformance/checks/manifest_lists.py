@@ -11,7 +11,7 @@ from __future__ import annotations
 from collections.abc import Iterator, Sequence
 from operator import attrgetter
 
-from ..context import Check, CheckContext
+from .context import Check, CheckContext
 from ..report.findings import Location, Violation, evidence
 from ..model.description import ModelDescription
 from ..model.unknowns import Unknown

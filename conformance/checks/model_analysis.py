@@ -12,7 +12,7 @@ import weakref
 from operator import attrgetter
 from typing import Optional
 
-from ..context import CheckContext
+from .context import CheckContext
 from ..report.findings import Location
 from ..model.description import FLOAT_TYPES, ModelDescription, Variable, VariableDetails
 from ..model.unknowns import Unknown

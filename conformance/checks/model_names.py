@@ -17,7 +17,7 @@ from __future__ import annotations
 from collections.abc import Iterator
 from operator import attrgetter
 
-from ..context import Check, CheckContext
+from .context import Check, CheckContext
 from ..report.findings import Location, Violation, evidence
 from ..model.description import ModelDescription, Variable
 from ..model.structured_names import all_structured, is_structured_name, name_problem

@@ -13,7 +13,7 @@ from functools import partial
 from itertools import chain
 from operator import attrgetter, is_not, itemgetter
 
-from ..context import Check, CheckContext
+from .context import Check, CheckContext
 from ..report.findings import Location, Violation, evidence
 from ..model.description import ModelDescription, Variable
 from ..model.unknowns import Unknown

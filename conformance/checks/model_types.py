@@ -17,7 +17,7 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 
-from ..context import Check, CheckContext
+from .context import Check, CheckContext
 from ..model.definitions import TypeDefinition, UnitDefinition
 from ..report.findings import Location, Violation, evidence
 from ..model.description import ModelDescription, Variable

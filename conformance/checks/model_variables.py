@@ -17,7 +17,7 @@ from __future__ import annotations
 from operator import attrgetter
 from typing import Iterator
 
-from ..context import Check, CheckContext
+from .context import Check, CheckContext
 from ..report.findings import Location, Violation, evidence
 from ..model.description import FLOAT_TYPES, Variable
 from ..model.unknowns import Unknown

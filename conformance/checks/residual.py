@@ -19,7 +19,7 @@ from collections.abc import Iterator, Sequence
 from itertools import repeat
 from operator import attrgetter, is_not
 
-from ..context import Check, CheckContext
+from .context import Check, CheckContext
 from ..report.findings import Location, Violation, evidence
 from ..model.description import FLOAT_TYPES, Variable
 from ..model.unknowns import Unknown

@@ -158,7 +158,7 @@ class Report:
     options: Evidence = ()
     not_checked: tuple[str, ...] = ()   # paths left unchecked when the run was interrupted
     # only in a report of ``lsdae check --shard I/N``: which share of the inputs it holds and
-    # what ``lsdae merge`` needs to put the shards back together (conformance/fleet.py)
+    # what ``lsdae merge`` needs to put the shards back together (conformance/run/fleet.py)
     shard: Evidence = ()
 
     @property

@@ -1,7 +1,7 @@
 """Read a JSON report (the output of :mod:`conformance.reporters.json_report`) back into a Report.
 
 The inverse of the JSON reporter, for ``lsdae merge`` (shard reports) and the result cache
-(:mod:`conformance.result_cache`): everything the reporters read comes back as it was written.
+(:mod:`conformance.run.result_cache`): everything the reporters read comes back as it was written.
 Fields the JSON reporter derives (``summary``, ``draft_label``, ``fix``) are not read, the
 reporters derive them again. Two things the JSON of an ordinary run does not hold are read when
 present: a finding's ``snippet`` (its source line) and the top-level ``shard`` section, both

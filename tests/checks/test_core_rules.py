@@ -7,7 +7,7 @@ import pytest
 from lxml import etree
 
 from conformance.checks import model_structure, model_variables
-from conformance.context import CheckContext
+from conformance.checks.context import CheckContext
 from conformance.model.manifest import read_manifest
 from conformance.model.description import read_model_description
 

@@ -5,10 +5,10 @@ import dataclasses
 
 import pytest
 
-from conformance import engine
+from conformance.run import engine
 from conformance.report.catalogue import Catalogue, default_catalogue
 from conformance.checks import REGISTRY
-from conformance.engine import EngineOptions, check_fmu
+from conformance.run.engine import EngineOptions, check_fmu
 from conformance.report.findings import Severity, Violation
 from conformance.model.layer import NOT_A_DAE_FMU
 from tests.fixturekit import Case, materialise, zip_scene
@@ -135,7 +135,7 @@ def test_a_reader_that_fails_never_calls_a_present_manifest_absent(tmp_path, mon
     def broken(*_args, **_kwargs):
         raise RecursionError("deep")
 
-    from conformance import reading
+    from conformance.run import reading
 
     monkeypatch.setattr(reading, "detect_draft", broken)  # fails before the draft is known
     report = check_fmu(_scene(tmp_path), options=EngineOptions(probes=False))

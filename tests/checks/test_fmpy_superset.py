@@ -28,7 +28,7 @@ from pathlib import Path
 import pytest
 from fmpy.validation import validate_fmu
 
-from conformance.engine import EngineOptions, check_fmu
+from conformance.run.engine import EngineOptions, check_fmu
 from conformance.model.manifest import MANIFEST
 from conformance.model.description import MODEL_DESCRIPTION
 from tests.fixturekit import scene_xml

@@ -7,7 +7,7 @@ import pytest
 
 from conformance.report.catalogue import CatalogueError, _rule, default_catalogue
 from conformance.cli import main
-from conformance.engine import check_fmu
+from conformance.run.engine import check_fmu
 from conformance.report.findings import Report
 from conformance.fixes.fixers import UNSAFE_FIXERS
 from conformance.reporters import json_report

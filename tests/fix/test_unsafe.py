@@ -4,7 +4,7 @@ from __future__ import annotations
 import pytest
 
 from conformance.cli import main
-from conformance.engine import EngineOptions, check_fmu
+from conformance.run.engine import EngineOptions, check_fmu
 from conformance.report.findings import Finding, Location, Severity, evidence
 from conformance.fix_command import fix_fmu
 from conformance.fixes.apply import keys

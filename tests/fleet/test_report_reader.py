@@ -6,7 +6,7 @@ from dataclasses import replace
 
 import pytest
 
-from conformance.engine import EngineOptions, check_paths
+from conformance.run.engine import EngineOptions, check_paths
 from conformance.report.findings import evidence
 from conformance.report.reader import SCHEMA_VERSION, ReportFormatError, read_report
 from conformance.reporters import REPORTER_BY_NAME, json_report

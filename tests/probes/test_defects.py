@@ -6,7 +6,7 @@ import re
 import pytest
 
 from conformance.report.catalogue import default_catalogue
-from conformance.engine import EngineOptions, check_fmu
+from conformance.run.engine import EngineOptions, check_fmu
 from conformance.report.findings import Severity
 from scenes.build import SCENES_DIR
 from tests.fixturekit import FIXTURES

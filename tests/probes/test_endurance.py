@@ -14,7 +14,7 @@ import pytest
 
 from conformance.report.catalogue import Catalogue, default_catalogue
 from conformance.cli import main
-from conformance.engine import EngineOptions, check_fmu
+from conformance.run.engine import EngineOptions, check_fmu
 from conformance.report.findings import Finding, FmuReport, thaw
 from conformance.probes import endurance_run
 from conformance.probes.api import Point, ProbeContext, ProbeSkipped

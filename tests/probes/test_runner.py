@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from conformance.report.catalogue import Catalogue, default_catalogue
-from conformance.engine import EngineOptions, check_fmu, check_paths
+from conformance.run.engine import EngineOptions, check_fmu, check_paths
 from conformance.report.findings import Severity
 from conformance.model.manifest import MANIFEST
 from conformance.probes import driver, registry, runner

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import pytest
 
-from conformance.engine import EngineOptions, check_fmu
+from conformance.run.engine import EngineOptions, check_fmu
 from conformance.report.findings import Severity
 from tests.fixtures.defects.variants import variant
 

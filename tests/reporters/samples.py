@@ -16,7 +16,7 @@ import os
 from pathlib import Path
 
 from conformance.report.catalogue import Catalogue, RuleSpec, default_catalogue
-from conformance.engine import EngineOptions, check_fmu
+from conformance.run.engine import EngineOptions, check_fmu
 from conformance.report.findings import (
     Finding,
     FmuReport,

@@ -21,7 +21,7 @@ from lxml import etree
 
 from conformance.report.catalogue import default_catalogue
 from conformance.cli import main
-from conformance.engine import EngineOptions, check_fmu
+from conformance.run.engine import EngineOptions, check_fmu
 from conformance.model.layer import NOT_A_DAE_FMU
 from conformance.model.manifest import MANIFEST
 from conformance.intake.schema_loader import core_schema_dir

@@ -24,7 +24,7 @@ import numpy as np
 import pytest
 
 from conformance.report.catalogue import default_catalogue
-from conformance.engine import EngineOptions, check_fmu
+from conformance.run.engine import EngineOptions, check_fmu
 from conformance.report.findings import thaw
 from scenes.build import SCENES_DIR, build_scene
 from tests.scenes.test_scenes import SCENES, Instance

@@ -81,7 +81,7 @@ def test_correct_equations_with_zero_derivatives_simulate(loaded, mode):
 
 
 def test_check_uses_the_probes_verdict_and_the_model_simulates():
-    from conformance.engine import EngineOptions, check_fmu
+    from conformance.run.engine import EngineOptions, check_fmu
     from conformance.reporters.json_report import fmu_dict
 
     fmu = build_scene("SimpleDAE", defines=["DEFECT_ZERO_DIRECTIONAL"])

@@ -17,19 +17,15 @@ PACKAGE = Path(__file__).resolve().parents[2] / "conformance"
 FLOORS: list[tuple[str, ...]] = [
     ("__main__",),
     ("cli",),
-    ("simulate_command", "fix_command", "check_command", "rules_command", "exit_codes", "parallel",
+    ("simulate_command", "fix_command", "check_command", "rules_command", "exit_codes",
      "arguments", "merge_command"),
-    ("fleet",),
-    ("simulate_fmu",),
-    ("engine",),
-    ("engine_options", "collector", "reading"),
+    ("run",),
     ("checks", "probes", "fixes"),
     ("simulate",),
-    ("runtime", "precommit", "context"),
-    ("intake", "reporters", "ruledocs", "result_cache", "source_texts"),
+    ("runtime", "precommit"),
+    ("intake", "reporters", "ruledocs"),
     ("model", "config"),
-    ("numerics", "report", "progress", "process_pool", "background", "heap",
-     "__init__", "sharding"),
+    ("numerics", "report", "__init__"),
 ]
 
 

@@ -51,7 +51,7 @@ def small_fmu() -> str:
 def test_commands_that_read_no_fmu_load_no_heavy_module_and_no_xml_library(argv):
     code, loaded = _loaded(argv)
     assert code == 0
-    assert sorted(loaded & {*HEAVY, "lxml", "conformance.engine"}) == []
+    assert sorted(loaded & {*HEAVY, "lxml", "conformance.run.engine"}) == []
 
 
 def test_a_static_check_of_a_small_fmu_loads_no_numerical_library(small_fmu, tmp_path):

@@ -1,7 +1,7 @@
 """Many FMUs over a CI job matrix: the share of one ``--shard I/N`` job and the ``--cache-dir``.
 
 ``lsdae check`` asks :func:`plan` which of its inputs to check (the shard's, by
-:mod:`conformance.sharding`, minus those whose result the cache holds), checks them as always,
+:mod:`conformance.run.sharding`, minus those whose result the cache holds), checks them as always,
 and hands the result to :meth:`Plan.finish`, which stores the new results in the cache and puts
 the report together in input order. A shard's report carries a ``shard`` section (its place in
 the whole input list, the fingerprints of its settings, the rule options, the durations) so that
@@ -21,11 +21,11 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
-from . import __version__
-from .report.catalogue import Catalogue
-from .engine_options import EngineOptions
-from .report.findings import FmuReport, Report, evidence
-from .report.paths import schemas_dir
+from .. import __version__
+from ..report.catalogue import Catalogue
+from .options import EngineOptions
+from ..report.findings import FmuReport, Report, evidence
+from ..report.paths import schemas_dir
 from .result_cache import ResultCache, content_hash
 from .sharding import assign, input_names, input_size, inputs_digest, parse_shard
 
@@ -66,7 +66,7 @@ def code_fingerprint() -> str:
     from importlib import metadata  # lazy: only a run with --cache-dir asks
 
     digest = hashlib.sha256()
-    package = Path(__file__).resolve().parent
+    package = Path(__file__).resolve().parents[1]  # conformance/
     for root in (package, schemas_dir()):
         for file in sorted(root.rglob("*")):
             if file.suffix in (".py", ".xsd") and file.is_file():

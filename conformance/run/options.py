@@ -7,8 +7,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from .report.catalogue import Catalogue, RuleSpec
-from .report.findings import Severity
+from ..report.catalogue import Catalogue, RuleSpec
+from ..report.findings import Severity
 
 
 @dataclass(frozen=True)

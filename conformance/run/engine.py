@@ -3,8 +3,8 @@
 Checks and stages yield plain :class:`Violation` objects; the engine looks their rule up in the
 catalogue, applies the user's selection and severity overrides, groups repeated violations, adds
 the source line, and freezes everything into an :class:`FmuReport` (the selection is in
-:mod:`conformance.engine_options`, the grouping and source lines in :mod:`conformance.collector`,
-the reading of the XML files and the run's state in :mod:`conformance.reading`).
+:mod:`conformance.run.options`, the grouping and source lines in :mod:`conformance.run.collector`,
+the reading of the XML files and the run's state in :mod:`conformance.run.reading`).
 Nothing here raises for bad input: an exception inside a check becomes an ``internal-error``
 finding and the run goes on.
 """
@@ -17,19 +17,19 @@ import time
 from pathlib import Path
 from typing import Iterator, Sequence
 
-from . import __version__
-from .report.catalogue import Catalogue, default_catalogue
-from .checks import REGISTRY
+from .. import __version__
+from ..report.catalogue import Catalogue, default_catalogue
+from ..checks import REGISTRY
 from .collector import Collector
-from .context import CheckContext
-from .engine_options import EngineOptions, RuleSelection
-from .report.findings import FmuReport, Report, Violation, evidence
-from .intake.fmu import ArchiveLimits, open_fmu
+from ..checks.context import CheckContext
+from .options import EngineOptions, RuleSelection
+from ..report.findings import FmuReport, Report, Violation, evidence
+from ..intake.fmu import ArchiveLimits, open_fmu
 from .heap import RELEASE_FROM, release_freed_memory
-from .model.layer import skip_reason
-from .model.manifest import MANIFEST
+from ..model.layer import skip_reason
+from ..model.manifest import MANIFEST
 from .reading import RunState, read_manifest_file, read_model, read_xml
-from .intake.schemas import (
+from ..intake.schemas import (
     BUILD_DESCRIPTION_FILE,
     validate_build_description,
 )
@@ -140,7 +140,7 @@ def _run_probe_stage(source, ctx: CheckContext, options: EngineOptions, catalogu
         state.skipped.update((r.code, "probes turned off (--no-probes)") for r in rules)
         state.info["probes"] = "not run: probes turned off (--no-probes)"
         return
-    from .probes.runner import run_probes  # numpy and the worker machinery only when probing
+    from ..probes.runner import run_probes  # numpy and the worker machinery only when probing
 
     outcome = run_probes(source, ctx, rules, seed=options.seed, endurance=options.endurance)
     for code, violation in outcome.violations:

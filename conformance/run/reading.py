@@ -1,8 +1,8 @@
 """Reading an FMU's XML files for the checks, and the state of one check.
 
 Each file is read once, parsed safely (:mod:`conformance.intake.xmlsafe`), its bytes kept for source
-lines (:mod:`conformance.source_texts`), and validated against its XSD in a
-:class:`~conformance.background.Background` thread while the same tree is read into the model
+lines (:mod:`conformance.run.source_texts`), and validated against its XSD in a
+:class:`~conformance.run.background.Background` thread while the same tree is read into the model
 or the manifest. What could not be read is remembered in :class:`RunState`, so that the rules
 that need it are listed as not run, with the reason.
 """
@@ -12,17 +12,17 @@ from typing import Sequence
 
 from .background import Background
 from .collector import Collector
-from .model.drafts.detect import UNKNOWN, detect_draft, unrecognised_violations
-from .model.drafts.migrate import legacy_violations
-from .engine_options import EngineOptions
-from .report.findings import Location, Violation, evidence
-from .intake.fmu import ArchiveReadError
-from .model.layer import manifest_missing
-from .model.manifest import MANIFEST, Manifest, read_manifest
-from .model.description import MODEL_DESCRIPTION, ModelDescription, read_model_description
-from .intake.schemas import validate_manifest, validate_model_description
+from ..model.drafts.detect import UNKNOWN, detect_draft, unrecognised_violations
+from ..model.drafts.migrate import legacy_violations
+from .options import EngineOptions
+from ..report.findings import Location, Violation, evidence
+from ..intake.fmu import ArchiveReadError
+from ..model.layer import manifest_missing
+from ..model.manifest import MANIFEST, Manifest, read_manifest
+from ..model.description import MODEL_DESCRIPTION, ModelDescription, read_model_description
+from ..intake.schemas import validate_manifest, validate_model_description
 from .source_texts import SourceTexts
-from .intake.xmlsafe import parse_xml
+from ..intake.xmlsafe import parse_xml
 
 
 class RunState:

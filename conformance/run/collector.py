@@ -1,7 +1,7 @@
 """Violations in, findings out: the rule, its severity, grouping and the source line.
 
 :class:`Collector` keeps the violations of the rules that the
-:class:`~conformance.engine_options.RuleSelection` enables, groups repeated ones into one finding
+:class:`~conformance.run.options.RuleSelection` enables, groups repeated ones into one finding
 with a count, and adds the source line each finding points at (:class:`LineCache`).
 """
 from __future__ import annotations
@@ -10,16 +10,16 @@ import re
 from dataclasses import replace
 from typing import Iterable, Protocol
 
-from .report.catalogue import RuleSpec
-from .engine_options import RuleSelection
-from .report.findings import Finding, Location, Violation, evidence
+from ..report.catalogue import RuleSpec
+from .options import RuleSelection
+from ..report.findings import Finding, Location, Violation, evidence
 
 GROUP_SHOWN = 5
 START_TAG_LOOKBACK = 200  # lines searched upwards for the '<' that starts a tag
 
 
 class Texts(Protocol):
-    """The bytes of the files findings point into (:class:`conformance.source_texts.SourceTexts`,
+    """The bytes of the files findings point into (:class:`conformance.run.source_texts.SourceTexts`,
     or a plain dict)."""
 
     def get(self, name: str, /) -> bytes | None: ...

@@ -16,12 +16,12 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from .report.catalogue import Catalogue, default_catalogue
+from ..report.catalogue import Catalogue, default_catalogue
 from .engine import EngineOptions, check_fmu
-from .report.findings import thaw
-from .intake.fmu import MODEL_DESCRIPTION, ArchiveReadError, open_fmu
-from .model.description import ModelDescription, read_model_description
-from .intake.xmlsafe import parse_xml
+from ..report.findings import thaw
+from ..intake.fmu import MODEL_DESCRIPTION, ArchiveReadError, open_fmu
+from ..model.description import ModelDescription, read_model_description
+from ..intake.xmlsafe import parse_xml
 
 
 RULES_BY_MODE = {"dae": ("DAE801", "DAE802", "DAE803", "DAE804"),
@@ -134,7 +134,7 @@ def simulate_fmu(path: Path | str, settings: Any) -> Simulation:
     simulation = info.get("simulation") if isinstance(info, dict) else None
     result = Simulation(report, catalogue)
     if isinstance(simulation, dict) and simulation.get("times") is not None:
-        from .numerics.settings import Trajectory  # numpy: only once a run is read back
+        from ..numerics.settings import Trajectory  # numpy: only once a run is read back
 
         result.trajectories.append(Trajectory.from_info(simulation))
         if isinstance(simulation.get("ode"), dict):

@@ -1,6 +1,6 @@
 """The bytes of the XML files a check read, for the source lines its findings show.
 
-A finding shows the line it points at (:class:`conformance.collector.LineCache`). Keeping every
+A finding shows the line it points at (:class:`conformance.run.collector.LineCache`). Keeping every
 file's bytes until the end of the check would hold a large modelDescription.xml (85 MB at 500k
 variables) in memory beside its parsed tree and the model read from it, although a conformant
 FMU needs no line at all. So a file up to :data:`KEEP_BYTES` is kept; a larger one is read again
@@ -12,7 +12,7 @@ import logging
 from pathlib import Path
 from typing import Callable
 
-from .intake.fmu import ArchiveLimits, open_fmu
+from ..intake.fmu import ArchiveLimits, open_fmu
 
 log = logging.getLogger(__name__)
 

@@ -1,7 +1,7 @@
 """Check many FMUs, one after another or in parallel processes, with a progress display.
 
-``-j N`` runs :func:`conformance.engine.check_fmu` in N spawned processes
-(:mod:`conformance.process_pool`, imported only then). Reports come back in input order, so
+``-j N`` runs :func:`conformance.run.engine.check_fmu` in N spawned processes
+(:mod:`conformance.run.process_pool`, imported only then). Reports come back in input order, so
 ``-j 2`` writes the same bytes as ``-j 1``. A worker that dies (killed, out of memory, a crash in
 a native library) breaks the whole pool; the FMUs that had not finished are then re-checked one at
 a time, each in a fresh process, and an FMU whose worker dies again gets an ``internal-error``
@@ -15,10 +15,10 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Callable, Sequence
 
-from .report.catalogue import Catalogue, default_catalogue
+from ..report.catalogue import Catalogue, default_catalogue
 from .engine import EngineOptions, check_fmu, check_paths
-from .engine_options import RuleSelection
-from .report.findings import Finding, FmuReport, Location, Report, evidence
+from .options import RuleSelection
+from ..report.findings import Finding, FmuReport, Location, Report, evidence
 from .progress import NoProgress, Progress
 
 log = logging.getLogger(__name__)

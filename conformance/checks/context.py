@@ -4,10 +4,10 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any, Callable, Iterable, TypeVar
 
-from .report.findings import Violation
-from .model.layer import layer_declaration
-from .model.manifest import Manifest
-from .model.description import ModelDescription
+from ..report.findings import Violation
+from ..model.layer import layer_declaration
+from ..model.manifest import Manifest
+from ..model.description import ModelDescription
 
 
 T = TypeVar("T")

@@ -4,7 +4,7 @@ The key is the FMU's content (sha256 of the ``.fmu`` bytes; for an unpacked fold
 file's relative path and bytes, and of its folders and symbolic links) together with a
 fingerprint of what decides the findings (lsdae's version, a digest of its code and schemas and
 of the libraries' versions, the rule catalogue with its options, the engine options and the
-platform, computed by :mod:`conformance.fleet`). An
+platform, computed by :mod:`conformance.run.fleet`). An
 unchanged FMU checked with the same settings gets its stored :class:`FmuReport` back and is not
 checked again; one changed byte is another key.
 
@@ -23,9 +23,9 @@ import stat
 import tempfile
 from pathlib import Path
 
-from .report.findings import FmuReport
-from .report.reader import read_fmu
-from .reporters.json_report import fmu_dict
+from ..report.findings import FmuReport
+from ..report.reader import read_fmu
+from ..reporters.json_report import fmu_dict
 
 log = logging.getLogger(__name__)
 

@@ -3,6 +3,10 @@
 ``REGISTRY`` maps a rule code to the function that checks it: explicit, no discovery magic.
 Each family module exposes its own ``CHECKS`` dict; the test suite checks that the registry and
 the static part of the catalogue match one to one.
+
+A check sees only a :class:`~conformance.checks.context.CheckContext` (the parsed model and
+manifest) and its options. It imports ``model``, ``report`` and ``numerics`` (the graph
+algorithms); never ``probes``, ``fixes``, ``run`` or ``commands``.
 """
 from __future__ import annotations
 

@@ -6,4 +6,7 @@ changes, one fixer per concern, and :mod:`.archive` writes the result: every oth
 zip copied raw (same order, names, compression and bytes), an unpacked folder changed only in the
 files fixed. :mod:`.apply` runs the fixers one at a time and keeps a change only when the re-check
 shows it fixed what it claimed and made nothing worse.
+
+The re-check is passed in from above (``commands.fix``). It imports ``intake``, ``model`` (the
+drafts' migration), ``report`` and ``numerics``; never ``run`` or ``commands``.
 """

@@ -9,4 +9,7 @@ importing another; and what they share: ``jacobian`` (the survey), ``common``, `
 
 Nothing is imported here: the engine imports ``runner`` only when it probes, and the runner plans
 the run from the registry's codes alone: numpy and the families load in the worker process only.
+
+It imports ``simulate``, ``runtime``, ``intake``, ``model``, ``report`` and ``numerics``; never
+``checks``, ``fixes``, ``run`` or ``commands``.
 """

@@ -6,6 +6,8 @@ formats are registered; docs/formats.md describes them.
 
 A format's module is imported when its renderer is first looked up, so a run that writes JSON
 does not load the HTML, SARIF and JUnit writers (and ``lsdae --version`` none of them).
+
+It imports ``report`` and ``model.drafts.names`` (the draft labels) only.
 """
 from __future__ import annotations
 

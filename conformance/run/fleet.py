@@ -5,7 +5,7 @@
 and hands the result to :meth:`Plan.finish`, which stores the new results in the cache and puts
 the report together in input order. A shard's report carries a ``shard`` section (its place in
 the whole input list, the fingerprints of its settings, the rule options, the durations) so that
-``lsdae merge`` (:mod:`conformance.merge_command`) can rebuild the report an unsharded run would
+``lsdae merge`` (:mod:`conformance.commands.merge`) can rebuild the report an unsharded run would
 have written, and refuse shards that do not belong together.
 """
 from __future__ import annotations

@@ -148,7 +148,7 @@ def test_a_reader_that_fails_never_calls_a_present_manifest_absent(tmp_path, mon
 def test_an_fmi2_fmu_is_one_warning_and_not_checked(tmp_path, capsys):
     """An FMI 2.0 FMU: fmi-version-unsupported once, no schema noise, every other rule skipped
     with the reason, exit 0 under the default --fail-on, and "not checked" in the summary."""
-    from conformance.cli import main
+    from conformance.commands.cli import main
     from tests.fixturekit import all_cases
 
     case = next(c for c in all_cases() if c.id == "DAE092/fail")

@@ -6,7 +6,7 @@ import json
 import pytest
 
 from conformance.report.catalogue import CatalogueError, _rule, default_catalogue
-from conformance.cli import main
+from conformance.commands.cli import main
 from conformance.run.engine import check_fmu
 from conformance.report.findings import Report
 from conformance.fixes.fixers import UNSAFE_FIXERS

@@ -6,7 +6,7 @@ import json
 import pytest
 
 from conformance.report.baseline import identity, load
-from conformance.cli import main
+from conformance.commands.cli import main
 from tests.integration.conftest import BOOLEAN_DAE, INT_DAE
 
 # A manifest-less FMU has one finding, DAE091, whose severity the tests choose.

@@ -6,7 +6,7 @@ import io
 import pytest
 
 from conformance.report.catalogue import default_catalogue
-from conformance.cli import main
+from conformance.commands.cli import main
 from conformance.run.engine import EngineOptions
 from conformance.run.parallel import check_all
 from conformance.run.progress import NoProgress, Progress, make_progress, wanted

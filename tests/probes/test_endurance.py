@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from conformance.report.catalogue import Catalogue, default_catalogue
-from conformance.cli import main
+from conformance.commands.cli import main
 from conformance.run.engine import EngineOptions, check_fmu
 from conformance.report.findings import Finding, FmuReport, thaw
 from conformance.probes import endurance_run

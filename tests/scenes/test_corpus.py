@@ -20,7 +20,7 @@ from fmpy.validation import validate_fmu
 from lxml import etree
 
 from conformance.report.catalogue import default_catalogue
-from conformance.cli import main
+from conformance.commands.cli import main
 from conformance.run.engine import EngineOptions, check_fmu
 from conformance.model.layer import NOT_A_DAE_FMU
 from conformance.model.manifest import MANIFEST

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from conformance.report.findings import thaw
-from conformance.simulate_command import add_parser, run, simulate_fmu, summary
+from conformance.commands.simulate import add_parser, run, simulate_fmu, summary
 from scenes.build import build_scene
 from tests.simkit import sim_settings
 

@@ -99,7 +99,7 @@ def test_check_uses_the_probes_verdict_and_the_model_simulates():
 def test_lsdae_simulate_checks_at_the_initial_point(tmp_path, capsys):
     import argparse
 
-    from conformance.simulate_command import add_parser, run
+    from conformance.commands.simulate import add_parser, run
 
     parser = argparse.ArgumentParser(prog="lsdae")
     add_parser(parser.add_subparsers(dest="command", required=True))

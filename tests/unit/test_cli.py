@@ -5,7 +5,7 @@ import json
 
 import pytest
 
-from conformance.cli import main
+from conformance.commands.cli import main
 from tests.fixturekit import Case, materialise
 
 

@@ -16,15 +16,13 @@ PACKAGE = Path(__file__).resolve().parents[2] / "conformance"
 
 FLOORS: list[tuple[str, ...]] = [
     ("__main__",),
-    ("cli",),
-    ("simulate_command", "fix_command", "check_command", "rules_command", "exit_codes",
-     "arguments", "merge_command"),
+    ("commands",),
     ("run",),
     ("checks", "probes", "fixes"),
     ("simulate",),
-    ("runtime", "precommit"),
-    ("intake", "reporters", "ruledocs"),
-    ("model", "config"),
+    ("runtime",),
+    ("intake", "reporters"),
+    ("model",),
     ("numerics", "report", "__init__"),
 ]
 

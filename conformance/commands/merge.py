@@ -17,16 +17,16 @@ from datetime import datetime, timezone
 from pathlib import Path
 from typing import Any
 
-from . import __version__
-from .report.baseline import apply as apply_baseline
-from .report.catalogue import Catalogue, default_catalogue, with_options
+from .. import __version__
+from ..report.baseline import apply as apply_baseline
+from ..report.catalogue import Catalogue, default_catalogue, with_options
 from .exit_codes import EXIT_OK, EXIT_USAGE, UsageError
-from .report.findings import Report, RunInfo, thaw
-from .report.reader import ReportFormatError, read_report
+from ..report.findings import Report, RunInfo, thaw
+from ..report.reader import ReportFormatError, read_report
 
 
 def run(args: argparse.Namespace) -> int:
-    from . import check_command as check  # lazy: the engine and every reporter, only to merge
+    from . import check  # lazy: the engine and every reporter, only to merge
 
     shards = [_load(path) for path in args.reports]
     report, rule_options, durations = _join(shards)
@@ -147,7 +147,7 @@ def _join(shards: list[_Shard]) -> tuple[Report, dict[str, Any], dict[str, float
 
 
 def _same_catalogue(catalogue: Catalogue, shards: list[_Shard]) -> None:
-    from .run.fleet import catalogue_fingerprint  # lazy: fleet imports the result cache's writer
+    from ..run.fleet import catalogue_fingerprint  # lazy: fleet imports the result cache's writer
 
     if catalogue_fingerprint(catalogue) != shards[0].info.get("catalogue"):
         raise UsageError(f"{shards[0].label} was checked with another rule catalogue than this "

@@ -27,11 +27,11 @@ from pathlib import Path
 from typing import Any
 
 from .arguments import add_simulate_parser as add_parser
-from .report.catalogue import default_catalogue
+from ..report.catalogue import default_catalogue
 from .exit_codes import EXIT_FINDINGS, EXIT_OK, EXIT_USAGE
-from .report.findings import Report, Severity
-from .reporters import REPORTER_BY_NAME
-from .run.simulate_fmu import (RULES_BY_MODE, Simulation, default_experiment, read_model,
+from ..report.findings import Report, Severity
+from ..reporters import REPORTER_BY_NAME
+from ..run.simulate_fmu import (RULES_BY_MODE, Simulation, default_experiment, read_model,
                            simulate_fmu, start_values)
 
 __all__ = ["Simulation", "add_parser", "run", "simulate_fmu", "summary"]
@@ -56,7 +56,7 @@ def _static_line(findings: list[Any], path: Path) -> str:
 
 def run(args: argparse.Namespace) -> int:
     """Run ``lsdae simulate``; returns the exit code."""
-    from .numerics.settings import Settings  # numpy: only when simulating
+    from ..numerics.settings import Settings  # numpy: only when simulating
 
     path = Path(args.fmu)
     if not path.exists():
@@ -165,7 +165,7 @@ def _comparison_line(comparison: dict) -> str:
 
 
 def _write(args: argparse.Namespace, trajectories: list) -> bool:
-    from .simulate.output import write_csv  # numpy: only when writing
+    from ..simulate.output import write_csv  # numpy: only when writing
 
     targets = [(args.output, trajectories[0] if trajectories else None)]
     if args.ode_output:

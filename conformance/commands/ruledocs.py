@@ -1,8 +1,8 @@
 """Render the rule catalogue as Markdown (docs/rules.md is generated from it, never by hand)."""
 from __future__ import annotations
 
-from .report.catalogue import Catalogue, RuleSpec
-from .model.drafts.names import DRAFT_LABELS
+from ..report.catalogue import Catalogue, RuleSpec
+from ..model.drafts.names import DRAFT_LABELS
 
 HEADER = """# lsdae rules
 

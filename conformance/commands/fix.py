@@ -21,20 +21,20 @@ from collections import Counter
 from pathlib import Path
 from typing import Any
 
-from . import __version__
+from .. import __version__
 from .arguments import add_fix_parser as add_parser  # noqa: F401  (the command's grammar)
-from .report.catalogue import default_catalogue
-from .check_command import exit_code
-from .run.engine import check_fmu
-from .run.options import EngineOptions, RuleSelection
+from ..report.catalogue import default_catalogue
+from .check import exit_code
+from ..run.engine import check_fmu
+from ..run.options import EngineOptions, RuleSelection
 from .exit_codes import EXIT_FINDINGS, EXIT_OK, UsageError
-from .report.findings import FmuReport, Report
-from .fixes.apply import ALL, Outcome, fix, key
-from .fixes.archive import Package
-from .fixes.fixers import UNSAFE_FIXERS
-from .intake.fmu import default_limits
+from ..report.findings import FmuReport, Report
+from ..fixes.apply import ALL, Outcome, fix, key
+from ..fixes.archive import Package
+from ..fixes.fixers import UNSAFE_FIXERS
+from ..intake.fmu import default_limits
 from .precommit import fmu_roots
-from .reporters import console
+from ..reporters import console
 
 def _split(values: list[str] | None) -> tuple[str, ...]:
     return tuple(v.strip() for value in values or () for v in value.split(",") if v.strip())

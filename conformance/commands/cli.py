@@ -1,9 +1,9 @@
 """Command line: wiring only; each command returns the exit code.
 
-The grammar is :mod:`conformance.arguments`. The commands live beside this module:
-:mod:`conformance.check_command` (``check``, ``pre-commit``), :mod:`conformance.rules_command`
-(``rules``, ``explain``), :mod:`conformance.simulate_command`, :mod:`conformance.fix_command` and
-:mod:`conformance.merge_command`.
+The grammar is :mod:`conformance.commands.arguments`. The commands live beside this module:
+:mod:`conformance.commands.check` (``check``, ``pre-commit``), :mod:`conformance.commands.explain`
+(``rules``, ``explain``), :mod:`conformance.commands.simulate`, :mod:`conformance.commands.fix` and
+:mod:`conformance.commands.merge`.
 Only the command in hand is imported, after the arguments are read: ``lsdae --version`` loads
 no engine, ``lsdae rules`` no XML library, ``lsdae check --no-probes`` no numerical library
 (tests/unit/test_startup_imports.py holds each command to that).
@@ -22,37 +22,37 @@ Command = Callable[[argparse.Namespace], int]
 
 
 def _check(args: argparse.Namespace) -> int:
-    from .check_command import cmd_check  # lazy: each command loads only what it needs
+    from .check import cmd_check  # lazy: each command loads only what it needs
     return cmd_check(args)
 
 
 def _precommit(args: argparse.Namespace) -> int:
-    from .check_command import cmd_precommit  # lazy: each command loads only what it needs
+    from .check import cmd_precommit  # lazy: each command loads only what it needs
     return cmd_precommit(args)
 
 
 def _rules(args: argparse.Namespace) -> int:
-    from .rules_command import cmd_rules  # lazy: each command loads only what it needs
+    from .explain import cmd_rules  # lazy: each command loads only what it needs
     return cmd_rules(args)
 
 
 def _explain(args: argparse.Namespace) -> int:
-    from .rules_command import cmd_explain  # lazy: each command loads only what it needs
+    from .explain import cmd_explain  # lazy: each command loads only what it needs
     return cmd_explain(args)
 
 
 def _simulate(args: argparse.Namespace) -> int:
-    from .simulate_command import run  # lazy: each command loads only what it needs
+    from .simulate import run  # lazy: each command loads only what it needs
     return run(args)
 
 
 def _fix(args: argparse.Namespace) -> int:
-    from .fix_command import run  # lazy: each command loads only what it needs
+    from .fix import run  # lazy: each command loads only what it needs
     return run(args)
 
 
 def _merge(args: argparse.Namespace) -> int:
-    from .merge_command import run  # lazy: each command loads only what it needs
+    from .merge import run  # lazy: each command loads only what it needs
     return run(args)
 
 
@@ -74,7 +74,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         print("lsdae: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
     except Exception as exc:  # never a bare traceback
-        from .report.catalogue import CatalogueError  # lazy: --version and --help need no catalogue
+        from ..report.catalogue import CatalogueError  # lazy: --version and --help need no catalogue
         if isinstance(exc, CatalogueError):
             print(f"lsdae: the rule catalogue is broken: {exc}", file=sys.stderr)
             return EXIT_USAGE

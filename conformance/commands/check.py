@@ -17,20 +17,20 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
-from .report.baseline import Baseline, BaselineError, BaselineResult
-from .report.baseline import apply as apply_baseline
-from .report.baseline import load as load_baseline
-from .report.baseline import write as write_baseline
-from .report.catalogue import Catalogue, default_catalogue, with_options
+from ..report.baseline import Baseline, BaselineError, BaselineResult
+from ..report.baseline import apply as apply_baseline
+from ..report.baseline import load as load_baseline
+from ..report.baseline import write as write_baseline
+from ..report.catalogue import Catalogue, default_catalogue, with_options
 from .config import ConfigError, load_config
-from .run.engine import EngineOptions
+from ..run.engine import EngineOptions
 from .exit_codes import EXIT_FINDINGS, EXIT_INTERRUPTED, EXIT_OK, EXIT_USAGE, UsageError
-from .report.findings import Report, RunInfo, Severity
-from .run.fleet import plan as fleet_plan
-from .run.parallel import check_all
+from ..report.findings import Report, RunInfo, Severity
+from ..run.fleet import plan as fleet_plan
+from ..run.parallel import check_all
 from .precommit import fmu_roots
-from .run.progress import make_progress
-from .reporters import REPORTER_BY_NAME
+from ..run.progress import make_progress
+from ..reporters import REPORTER_BY_NAME
 
 
 def _split(values: Sequence[str] | None) -> tuple[str, ...]:

@@ -11,8 +11,8 @@ from __future__ import annotations
 from pathlib import Path, PurePosixPath
 from typing import Iterable
 
-from .model.manifest import MANIFEST
-from .model.description import MODEL_DESCRIPTION
+from ..model.manifest import MANIFEST
+from ..model.description import MODEL_DESCRIPTION
 
 _MANIFEST_PARTS = PurePosixPath(MANIFEST).parts
 

@@ -4,8 +4,8 @@ from __future__ import annotations
 import argparse
 import sys
 
-from .report.catalogue import Catalogue, RuleSpec, default_catalogue
-from .model.drafts.names import DRAFT_LABELS
+from ..report.catalogue import Catalogue, RuleSpec, default_catalogue
+from ..model.drafts.names import DRAFT_LABELS
 from .exit_codes import EXIT_OK, UsageError
 from .ruledocs import render_markdown
 

@@ -1,7 +1,7 @@
 """The command line's grammar: every command's arguments, and nothing else.
 
 It imports only argparse and plain constants, so that ``lsdae --version`` and ``lsdae --help``
-answer without loading the engine; :mod:`conformance.cli` builds the parser from here and imports
+answer without loading the engine; :mod:`conformance.commands.cli` builds the parser from here and imports
 the one command it runs.
 """
 from __future__ import annotations
@@ -10,10 +10,10 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from . import __version__
+from .. import __version__
 from .config import ENDURANCE_LEVELS, FAIL_ON
-from .model.drafts.names import ALL_DRAFTS
-from .reporters import FORMATS
+from ..model.drafts.names import ALL_DRAFTS
+from ..reporters import FORMATS
 
 
 EXIT_CODES = """exit codes:
@@ -149,7 +149,7 @@ def _positive(kind: type) -> Any:
 
 
 def _times(text: str) -> tuple[float, ...]:
-    from .numerics.settings import parse_times  # numpy: only when the option is given
+    from ..numerics.settings import parse_times  # numpy: only when the option is given
 
     try:
         return parse_times(text)

@@ -8,7 +8,7 @@ result and prints the remaining findings as ``check`` does, then "fixed N findin
 ``--diff`` prints a unified diff of every changed file on stdout (the findings and the summary
 go to stderr) and writes nothing. Exit codes: 0 when
 nothing at the ``--fail-on`` level remains, 1 otherwise, 2 on usage errors. It sits above the
-engine, beside ``check_command``.
+engine, beside ``check``.
 """
 from __future__ import annotations
 

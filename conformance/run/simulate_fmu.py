@@ -6,7 +6,7 @@ on a copy of the catalogue whose ``simulation-failed`` options are the given set
 time limits fit the budget, then reads the trajectories back from the report's
 ``info["simulation"]``. A crash or hang of the FMU is a ``binary-*`` finding, never a traceback.
 Also what the command reads from modelDescription.xml before it starts: the DefaultExperiment
-and the start values it is given. Used by ``lsdae simulate`` (:mod:`.simulate_command`).
+and the start values it is given. Used by ``lsdae simulate`` (:mod:`conformance.commands.simulate`).
 """
 from __future__ import annotations
 

@@ -1,9 +1,11 @@
 """Imports in conformance/ flow one way (docs/architecture.md): no circle, nothing climbs back up.
 
-Every module is given the floor of the first group in ``FLOORS`` (top first) that names it or its
-package. An import may go to the same floor or lower, never higher; the module graph as a whole
-has no circle; and an import inside a function carries a comment on its line saying why it is
-lazy (or sits under ``if TYPE_CHECKING:``).
+The top level of the package is a dozen rooms (subpackages), stacked in ``FLOORS`` (top first),
+the table of docs/architecture.md. Every module is on the floor of its room. An import may stay
+in its room or go to a lower floor, never higher and never sideways to another room of the same
+floor; the module graph as a whole has no circle; and an import inside a function carries a
+comment on its line saying why it is lazy (or sits under ``if TYPE_CHECKING:``). Each room's
+``__init__.py`` says what it holds and what it may import.
 """
 from __future__ import annotations
 
@@ -18,13 +20,13 @@ FLOORS: list[tuple[str, ...]] = [
     ("__main__",),
     ("commands",),
     ("run",),
-    ("checks", "probes", "fixes"),
-    ("simulate",),
-    ("runtime",),
-    ("intake", "reporters"),
+    ("probes",),
+    ("simulate", "fixes"),
+    ("checks", "runtime", "intake", "reporters"),
     ("model",),
-    ("numerics", "report", "__init__"),
+    ("report", "numerics", "__init__"),
 ]
+ROOMS = sorted(room for floor in FLOORS for room in floor if not room.startswith("__"))
 
 
 def _module(path: Path) -> str:
@@ -97,6 +99,30 @@ def test_imports_never_climb(module):
               if target and target.split(".")[0] != module.split(".")[0]
               and _floor(target) < _floor(module)]
     assert not climbs, "\n".join(climbs)
+
+
+@pytest.mark.parametrize("module", sorted(IMPORTS))
+def test_rooms_of_one_floor_do_not_import_each_other(module):
+    room = module.split(".")[0]
+    sideways = [f"line {line}: conformance.{module} imports conformance.{target}, another room "
+                f"of floor {_floor(module)}"
+                for target, line, _, _ in IMPORTS[module]
+                if target and target.split(".")[0] != room and _floor(target) == _floor(module)]
+    assert not sideways, "\n".join(sideways)
+
+
+def test_the_top_level_names_a_dozen_rooms_and_nothing_else():
+    entries = {p.name for p in PACKAGE.iterdir() if p.name != "__pycache__"}
+    rooms = {p.name for p in PACKAGE.iterdir() if (p / "__init__.py").is_file()}
+    assert entries - rooms == {"__init__.py", "__main__.py"}, "a loose module at the top level"
+    assert rooms == set(ROOMS) and len(rooms) <= 12
+
+
+@pytest.mark.parametrize("room", ROOMS)
+def test_each_room_says_what_it_holds_and_may_import(room):
+    doc = ast.get_docstring(ast.parse((PACKAGE / room / "__init__.py").read_text("utf-8")))
+    assert doc and len(doc.splitlines()) >= 3, f"conformance/{room}/__init__.py: no docstring"
+    assert "import" in doc, f"conformance/{room}/__init__.py: say what the room may import"
 
 
 @pytest.mark.parametrize("module", sorted(IMPORTS))

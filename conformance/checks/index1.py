@@ -4,8 +4,10 @@ The residual/algebraic-variable graph comes from the manifest ``dependencies`` o
 (an absent attribute means "depends on every algebraic variable", an empty one "on none", MS-20;
 entries that are not algebraic variables do not count). Array variables are expanded into their
 elements; since dependencies are per variable (MS-13), each element of a residual depends on every
-element of the algebraic variables it lists. The graph work is in :mod:`conformance.numerics.graphs.bipartite`,
-:mod:`conformance.numerics.graphs.matching` and :mod:`conformance.numerics.graphs.dulmage_mendelsohn`.
+element of the algebraic variables it lists. The graph work is in
+:mod:`conformance.numerics.graphs.bipartite`,
+:mod:`conformance.numerics.graphs.matching` and
+:mod:`conformance.numerics.graphs.dulmage_mendelsohn`.
 """
 from __future__ import annotations
 

@@ -1,8 +1,8 @@
 """Shared steps of the rules on the manifest's variable lists (AlgebraicVariables, Residuals).
 
 Each list entry (a :class:`~conformance.model.manifest.VrRef` or a Residual
-:class:`~conformance.model.unknowns.Unknown`) names a variable by value reference. The rules on a list
-partition its faults: unresolved entries, repeated entries, then one class of problem per
+:class:`~conformance.model.unknowns.Unknown`) names a variable by value reference. The rules on a
+list partition its faults: unresolved entries, repeated entries, then one class of problem per
 variable. The steps they share live here, so both families resolve and classify alike.
 """
 from __future__ import annotations

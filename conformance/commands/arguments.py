@@ -1,8 +1,8 @@
 """The command line's grammar: every command's arguments, and nothing else.
 
 It imports only argparse and plain constants, so that ``lsdae --version`` and ``lsdae --help``
-answer without loading the engine; :mod:`conformance.commands.cli` builds the parser from here and imports
-the one command it runs.
+answer without loading the engine; :mod:`conformance.commands.cli` builds the parser from here and
+imports the one command it runs.
 """
 from __future__ import annotations
 

@@ -74,7 +74,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         print("lsdae: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
     except Exception as exc:  # never a bare traceback
-        from ..report.catalogue import CatalogueError  # lazy: --version and --help need no catalogue
+        from ..report.catalogue import CatalogueError  # lazy: --version, --help need none
         if isinstance(exc, CatalogueError):
             print(f"lsdae: the rule catalogue is broken: {exc}", file=sys.stderr)
             return EXIT_USAGE

@@ -1,6 +1,7 @@
 """legacy-draft-shape: the migration to 1.0.0-alpha.1 as byte edits on the manifest as written.
 
-The steps are the ones :mod:`conformance.model.drafts.migrate` prints as hints, done: rename the root to
+The steps are the ones :mod:`conformance.model.drafts.migrate` prints as hints, done: rename the
+root to
 ``fmiDAEManifest`` and drop the default namespace (and an element prefix bound to the
 layered-standard namespace), ``EnableDAE`` -> ``EnableDAEParameter``, a numeric
 ``enableDAEModeVariable`` (a value reference, or a variable name looked up in

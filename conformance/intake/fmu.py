@@ -6,8 +6,8 @@ pseudo-rule: unsafe paths and links (``unsafe-archive-path``), entries that shar
 or entries that cannot be read (``archive-unreadable``) and compression methods FMI does not
 allow (``archive-compression-method``). Unsafe, oversized and undecodable entries are left out of
 :meth:`FmuSource.names`; everything else stays usable so the check goes on. The listing itself
-lives in :mod:`conformance.intake.archive.scan`, the reading in :mod:`conformance.intake.archive.source`; this
-module is the public API.
+lives in :mod:`conformance.intake.archive.scan`, the reading in
+:mod:`conformance.intake.archive.source`; this module is the public API.
 
 Reading is bounded twice: declared sizes are checked when the archive is opened, and every read
 counts the bytes actually decompressed and stops at the limit. Nothing is written anywhere except

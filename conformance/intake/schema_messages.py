@@ -2,8 +2,8 @@
 
 Clark names ``{uri}local`` become ``fmi-ls:local``, enumeration sets are spelled out without
 braces, and the ``Expected is ( .. )`` phrasing is made readable. :func:`attribute_of` names the
-attribute a message is about, so that :mod:`conformance.intake.schemas` can drop a follow-up error on an
-attribute that already has one.
+attribute a message is about, so that :mod:`conformance.intake.schemas` can drop a follow-up error
+on an attribute that already has one.
 """
 from __future__ import annotations
 

@@ -2,8 +2,8 @@
 
 Both use lxml (libxml2): it validates an 18 MB modelDescription in a fraction of a second,
 and its error log gives a line and an XPath for every error, which is all a finding needs. The
-schemas are located and loaded, offline, by :mod:`conformance.intake.schema_loader`: the FMI 3.0 core
-schema from the installed fmpy, ours from ``schemas/`` (one per draft).
+schemas are located and loaded, offline, by :mod:`conformance.intake.schema_loader`: the FMI 3.0
+core schema from the installed fmpy, ours from ``schemas/`` (one per draft).
 
 Legacy manifests may put their elements in the layered-standard namespace (as default namespace or
 with the ``fmi-ls:`` prefix) or leave them unqualified. Their schemas describe unqualified elements

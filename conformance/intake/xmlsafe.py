@@ -1,8 +1,8 @@
 """Parse XML from an untrusted FMU safely, and say precisely why a document cannot be used.
 
 :func:`parse_xml` never expands or fetches entities, never touches the network, keeps source
-lines, and never raises: every problem becomes a :class:`~conformance.report.findings.Violation` with one
-of these pseudo-rules
+lines, and never raises: every problem becomes a :class:`~conformance.report.findings.Violation`
+with one of these pseudo-rules
 
 - ``xml-not-well-formed``: the first (namespace) well-formedness error, with line and column.
   An undeclared prefix is reported as such even where libxml2 would only warn and build a tree.

@@ -1,8 +1,8 @@
 """``<TypeDefinitions>`` and ``<UnitDefinitions>`` of modelDescription.xml, as named tuples.
 
 Read once by :func:`conformance.model.description.read_model_description` into
-:attr:`ModelDescription.definitions <conformance.model.description.ModelDescription.definitions>`; the rules
-that resolve a variable's ``declaredType``, ``unit`` and ``displayUnit``
+:attr:`ModelDescription.definitions <conformance.model.description.ModelDescription.definitions>`;
+the rules that resolve a variable's ``declaredType``, ``unit`` and ``displayUnit``
 (:mod:`conformance.checks.model_types`) look names up here. Like the rest of the model, reading is
 lenient: an element without a ``name`` is kept with the empty name, and what the XSD forbids is
 the schema stage's to report.

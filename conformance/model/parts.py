@@ -1,8 +1,8 @@
 """The parts of a parsed modelDescription.xml: variables, the Model Exchange interface, the
 DefaultExperiment and the :class:`ModelDescription` that holds them, with the FMI 3.0 defaults
-of variability and initial (MV-11, MV-20). Immutable; :mod:`conformance.model.description` reads them from
-the XML. A variable keeps its rarely set attributes in one shared :class:`VariableDetails`,
-read through properties, so that 500k variables stay small.
+of variability and initial (MV-11, MV-20). Immutable; :mod:`conformance.model.description` reads
+them from the XML. A variable keeps its rarely set attributes in one shared
+:class:`VariableDetails`, read through properties, so that 500k variables stay small.
 """
 from __future__ import annotations
 

@@ -1,6 +1,7 @@
 """An element of a ModelStructure, in modelDescription.xml or in the manifest: :class:`Unknown`.
 
-Both readers (:mod:`conformance.model.description`, :mod:`conformance.model.manifest`) read a ModelStructure with
+Both readers (:mod:`conformance.model.description`, :mod:`conformance.model.manifest`) read a
+ModelStructure with
 :func:`read_structure` (one element: :func:`parse_unknown`), and unsigned-integer attributes
 with :func:`parse_uint`. Parsing is
 lenient: a value that does not parse becomes ``None`` or a ``bad_tokens`` entry, and the schema

@@ -7,8 +7,8 @@ reporters derive them again. Two things the JSON of an ordinary run does not hol
 present: a finding's ``snippet`` (its source line) and the top-level ``shard`` section, both
 written for shard reports and cache entries.
 
-Evidence is frozen again with :func:`~conformance.report.findings.evidence`, so it compares and renders
-as the engine's did. Non-finite numbers, written as the strings ``"nan"``, ``"inf"`` and
+Evidence is frozen again with :func:`~conformance.report.findings.evidence`, so it compares and
+renders as the engine's did. Non-finite numbers, written as the strings ``"nan"``, ``"inf"`` and
 ``"-inf"`` for strict JSON, come back as floats (a probe's measured error may be NaN; a string
 ``"nan"`` in evidence reads back as a float, which renders the same).
 """

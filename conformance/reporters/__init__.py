@@ -1,8 +1,8 @@
 """Reporters: one module per output format, each ``render(report, catalogue, **kw) -> str``.
 
 Reporters see only the frozen :class:`~conformance.report.findings.Report`, the catalogue and the
-:class:`~conformance.report.findings.RunInfo`, never the engine. ``REPORTER_BY_NAME`` is the one place
-formats are registered; docs/formats.md describes them.
+:class:`~conformance.report.findings.RunInfo`, never the engine. ``REPORTER_BY_NAME`` is the one
+place formats are registered; docs/formats.md describes them.
 
 A format's module is imported when its renderer is first looked up, so a run that writes JSON
 does not load the HTML, SARIF and JUnit writers (and ``lsdae --version`` none of them).

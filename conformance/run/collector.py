@@ -19,8 +19,8 @@ START_TAG_LOOKBACK = 200  # lines searched upwards for the '<' that starts a tag
 
 
 class Texts(Protocol):
-    """The bytes of the files findings point into (:class:`conformance.run.source_texts.SourceTexts`,
-    or a plain dict)."""
+    """The bytes of the files findings point into
+    (:class:`conformance.run.source_texts.SourceTexts`, or a plain dict)."""
 
     def get(self, name: str, /) -> bytes | None: ...
 

@@ -1,9 +1,9 @@
 """What listing and reading an FMU share: pseudo-rule names, limits, members, entry names.
 
-:mod:`conformance.intake.archive.scan` lists the entries and :mod:`conformance.intake.archive.source` reads
-them; both import this module and it imports neither, so there is no import cycle. The rule names
-and :class:`ArchiveLimits` are re-exported by :mod:`conformance.intake.fmu`; callers import them from
-there.
+:mod:`conformance.intake.archive.scan` lists the entries and
+:mod:`conformance.intake.archive.source` reads them; both import this module and it imports neither,
+so there is no import cycle. The rule names and :class:`ArchiveLimits` are re-exported by
+:mod:`conformance.intake.fmu`; callers import them from there.
 """
 from __future__ import annotations
 

@@ -1,7 +1,8 @@
 """What listing an FMU builds up, ZIP archive or folder alike: the inventory and its result.
 
 :class:`Inventory` collects the usable members, the excluded entries and the violations about
-them while :mod:`conformance.intake.archive.zipped` or :mod:`conformance.intake.archive.folder` walks the entries;
+them while :mod:`conformance.intake.archive.zipped` or :mod:`conformance.intake.archive.folder`
+walks the entries;
 :meth:`Inventory.finish` adds the checks that need the whole listing (names that differ only in
 letter case, a name that is both a file and a folder, the total size).
 """
@@ -25,11 +26,12 @@ from conformance.report.findings import Location, Violation, evidence
 
 @dataclass(slots=True)
 class ScanResult:
-    """What :func:`~conformance.intake.archive.scan.scan` found; ``kind`` is None when nothing is usable.
+    """What :func:`~conformance.intake.archive.scan.scan` found; ``kind`` is None when nothing is
+    usable.
 
     For a ZIP archive ``zf`` is the open archive, which the caller must close (an
-    :class:`~conformance.intake.archive.source.FmuSource` takes it over); for a folder ``root`` is its
-    real path.
+    :class:`~conformance.intake.archive.source.FmuSource` takes it over); for a folder ``root`` is
+    its real path.
     """
 
     kind: str | None

@@ -2,10 +2,11 @@
 
 :func:`scan` looks at every entry's name, type and declared size before anything is read, and
 sorts the entries into usable members and excluded ones, with a violation for each problem (see
-:mod:`conformance.intake.fmu` for the pseudo-rules). It reads no member data: :mod:`conformance.intake.fmu`
-builds the ``FmuSource`` (:mod:`conformance.intake.archive.source`) from the :class:`ScanResult`, which
-reads, bounded by the same limits. This module tells a folder from a ZIP archive; the listing
-itself is in :mod:`conformance.intake.archive.zipped` and :mod:`conformance.intake.archive.folder`.
+:mod:`conformance.intake.fmu` for the pseudo-rules). It reads no member data:
+:mod:`conformance.intake.fmu` builds the ``FmuSource`` (:mod:`conformance.intake.archive.source`)
+from the :class:`ScanResult`, which reads, bounded by the same limits. This module tells a folder
+from a ZIP archive; the listing itself is in :mod:`conformance.intake.archive.zipped` and
+:mod:`conformance.intake.archive.folder`.
 """
 from __future__ import annotations
 
@@ -13,7 +14,8 @@ import os
 import stat
 from pathlib import Path
 
-from conformance.intake.archive.base import UNREADABLE, ArchiveLimits, archive_violation, describe_error
+from conformance.intake.archive.base import (UNREADABLE, ArchiveLimits, archive_violation,
+                                             describe_error)
 from conformance.intake.archive.folder import scan_folder
 from conformance.intake.archive.inventory import ScanResult, unusable
 from conformance.intake.archive.zipped import scan_zip

@@ -1,8 +1,8 @@
 """An opened FMU: its safe members, read and extracted with bounded cost (:class:`FmuSource`).
 
-:func:`conformance.intake.fmu.open_fmu` builds it from what :mod:`conformance.intake.archive.scan` listed.
-Every read counts the bytes actually decompressed and stops at the limit; a member that cannot
-be read raises :class:`ArchiveReadError`, whose violation names the rule. Nothing is written
+:func:`conformance.intake.fmu.open_fmu` builds it from what :mod:`conformance.intake.archive.scan`
+listed. Every read counts the bytes actually decompressed and stops at the limit; a member that
+cannot be read raises :class:`ArchiveReadError`, whose violation names the rule. Nothing is written
 anywhere except by :meth:`FmuSource.extract_to`, and only into a private temporary directory.
 """
 from __future__ import annotations

@@ -4,8 +4,8 @@ Rows are residuals (equations ``0 = g_i``), columns are algebraic variables (unk
 and an edge ``(i, j)`` says that ``g_i`` may depend on ``w_j``. The semi-explicit DAE has index 1
 only if ``dg/dw`` is non-singular; a necessary condition that can be checked without a binary is
 that the sparsity pattern has full *structural* rank, the size of a maximum matching of this
-graph (DAE-51): :mod:`conformance.numerics.graphs.matching` finds it, and :mod:`conformance.numerics.graphs.dulmage_mendelsohn`
-says why it falls short.
+graph (DAE-51): :mod:`conformance.numerics.graphs.matching` finds it, and
+:mod:`conformance.numerics.graphs.dulmage_mendelsohn` says why it falls short.
 
 A residual whose ``dependencies`` attribute is absent depends on *every* algebraic variable
 (MS-20). Such rows are kept as a flag instead of ``n`` explicit edges, so that a large model that

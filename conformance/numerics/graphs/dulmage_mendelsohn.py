@@ -1,7 +1,7 @@
 """The coarse Dulmage-Mendelsohn decomposition of the residual/algebraic-variable graph.
 
-When the matching (:mod:`conformance.numerics.graphs.matching`) is not perfect, the decomposition says why, in
-terms a vendor can act on. With a maximum matching ``M``:
+When the matching (:mod:`conformance.numerics.graphs.matching`) is not perfect, the decomposition
+says why, in terms a vendor can act on. With a maximum matching ``M``:
 
 - the *over-determined* part holds the rows reachable from an unmatched row by an alternating
   path (row -> any adjacent column -> the row matched to it) and the columns on those paths;

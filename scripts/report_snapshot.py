@@ -42,9 +42,7 @@ def main(argv: list[str] | None = None) -> int:
     kinds = set(args.only or ("scenes", "corpus", "defects", "fixtures"))
     args.out.mkdir(parents=True, exist_ok=True)
     from scenes.build import build_scene, corpus_names, scene_names
-    from tests.fixturekit import all_cases, materialise
-    from tests.fixtures.defects import DEFECTS
-    from tests.fixtures.defects.variants import build as build_variant
+    from tests.fixtures import DEFECTS, all_cases, build_defect, materialise
 
     if "scenes" in kinds:
         for scene in scene_names():
@@ -54,7 +52,7 @@ def main(argv: list[str] | None = None) -> int:
             _write(args.out, f"corpus-{name}", build_scene(name), EngineOptions(probes=True))
     if "defects" in kinds:
         for defect in DEFECTS:
-            _write(args.out, f"defect-{defect.id}", build_variant(defect),
+            _write(args.out, f"defect-{defect.id}", build_defect(defect),
                    EngineOptions(probes=True))
     if "fixtures" in kinds:
         for case in all_cases():

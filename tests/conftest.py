@@ -1,7 +1,19 @@
-"""Suite-wide options: ``--fuzz N`` scales the mutation test (``make fuzz``)."""
+"""Suite-wide options and fixtures.
+
+``--fuzz N`` scales the mutation test (``make fuzz``). The fixtures hand out what
+:mod:`tests.fixtures` builds: small FMU folders (``fmu``), the scene FMUs of the fleet tests
+(``scene_fmus``) and every rule case as an FMU (``fixture_fmus``).
+"""
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
+
+from tests.fixtures import all_cases, build_scene, make_fmu, materialise
+
+#: Scenes with binaries (checked with --no-probes but for the probe case) of different sizes.
+FLEET_SCENES = ("HelloWorldDAE", "SimpleDAE", "VanDerPolDAE", "Robertson", "FourBar")
 
 
 def pytest_addoption(parser: pytest.Parser) -> None:
@@ -12,3 +24,23 @@ def pytest_addoption(parser: pytest.Parser) -> None:
 @pytest.fixture
 def fuzz(request: pytest.FixtureRequest) -> int:
     return int(request.config.getoption("--fuzz"))
+
+
+@pytest.fixture
+def fmu(tmp_path):
+    """``fmu(name, **kw)`` -> the path of a fresh FMU folder under tmp_path."""
+    def factory(name: str, **kw) -> Path:
+        return make_fmu(tmp_path / name, **kw)
+    return factory
+
+
+@pytest.fixture(scope="session")
+def scene_fmus() -> list[str]:
+    return [str(build_scene(name)) for name in FLEET_SCENES]
+
+
+@pytest.fixture(scope="session")
+def fixture_fmus(tmp_path_factory) -> list[str]:
+    """Every rule fixture, failing and passing, as an FMU folder or .fmu file."""
+    root = tmp_path_factory.mktemp("fixtures")
+    return [str(materialise(case, root / case.id.replace("/", "_"))) for case in all_cases()]

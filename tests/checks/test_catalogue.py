@@ -8,12 +8,12 @@ import pytest
 from conformance.report.catalogue import default_catalogue
 from conformance.checks import REGISTRY
 from conformance.commands.explain import explain_text
-from tests.fixturekit import FIXTURES
+from tests.fixtures import FIXTURES
 
 CATALOGUE = default_catalogue()
 RULES = list(CATALOGUE)
 # Rules that no input can trigger on purpose; each has a dedicated test instead.
-NO_FIXTURE = {"internal-error": "tests/checks/test_engine.py::test_internal_error_is_a_finding"}
+NO_FIXTURE = {"internal-error": "tests/run/test_engine.py::test_internal_error_is_a_finding"}
 
 
 def test_registry_matches_static_catalogue():

@@ -5,7 +5,7 @@ import pytest
 
 from conformance.run.engine import EngineOptions, check_fmu
 from conformance.report.findings import Severity
-from tests.fixturekit import Case, all_cases, materialise
+from tests.fixtures import Case, all_cases, materialise
 
 CASES = all_cases()
 

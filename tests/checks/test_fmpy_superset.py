@@ -31,7 +31,7 @@ from fmpy.validation import validate_fmu
 from conformance.run.engine import EngineOptions, check_fmu
 from conformance.model.manifest import MANIFEST
 from conformance.model.description import MODEL_DESCRIPTION
-from tests.fixturekit import scene_xml
+from tests.fixtures import scene_xml
 
 # fmpy's message pattern -> the lsdae rules that cover that problem class (any one suffices).
 FMPY_CLASSES: dict[str, tuple[str, tuple[str, ...]]] = {

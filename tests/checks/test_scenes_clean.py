@@ -4,7 +4,7 @@ from __future__ import annotations
 import pytest
 
 from conformance.run.engine import EngineOptions, check_fmu
-from scenes.build import build_scene, scene_names
+from tests.fixtures import build_scene, scene_names
 
 
 @pytest.mark.parametrize("name", ["SimpleDAE", "Robertson", "HelloWorldDAE", "EventDAE"])

@@ -21,7 +21,7 @@ from conformance.runtime.instance import Instance
 from conformance.runtime.layout import Layout
 from conformance.runtime.library import Library
 from conformance.runtime.modes import configure, start_instance
-from scenes.Chain import chain
+from tests.fixtures import chain
 
 N = 2000
 X, DER, U, Y = 2, 3, 4, 5

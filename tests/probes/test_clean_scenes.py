@@ -7,7 +7,7 @@ from __future__ import annotations
 import pytest
 
 from conformance.run.engine import EngineOptions, check_fmu
-from scenes.build import build_scene
+from tests.fixtures import build_scene
 
 SEEDS = range(20)
 

@@ -20,7 +20,7 @@ from conformance.model.description import read_model_description
 from conformance.probes import derivatives as D
 from conformance.probes import dgdw
 from conformance.probes.api import FmiError, Point, ProbeContext, ProbeSkipped
-from scenes.build import SCENES_DIR
+from tests.fixtures import SCENES_DIR
 
 FAMILY = {**D.PROBES, **dgdw.PROBES}  # the derivative probes and the dg/dw probes
 OPTIONS = {r.code: r.option_values for r in default_catalogue()}  # the one place of defaults
@@ -496,7 +496,7 @@ def test_probe_errors_are_published_for_mismatches():
 # ------------------------------------------------------------------- the Chain scene (real)
 
 def test_chain_xml_is_the_generators():
-    from scenes.Chain import chain
+    from tests.fixtures import chain
 
     here = SCENES / "Chain"
     assert (here / "modelDescription.xml").read_text() == chain.model_description(4)
@@ -506,18 +506,18 @@ def test_chain_xml_is_the_generators():
 @pytest.mark.parametrize("seed", range(20))
 def test_chain_fmu_is_clean_with_probes(seed):
     from conformance.run.engine import EngineOptions, check_fmu
-    from scenes.Chain.chain import build_chain
+    from tests.fixtures import chain
 
-    report = check_fmu(build_chain(), options=EngineOptions(probes=True, seed=seed))
+    report = check_fmu(chain.build_chain(), options=EngineOptions(probes=True, seed=seed))
     assert report.findings == (), [(f.code, f.subject, f.message) for f in report.findings]
     assert [c for c, _ in report.rules_skipped if c.startswith("DAE7")] == []
 
 
 def test_larger_chain_fmu_is_clean_and_coloured_with_three_groups():
     from conformance.run.engine import EngineOptions, check_fmu
-    from scenes.Chain.chain import build_chain
+    from tests.fixtures import chain
 
-    report = check_fmu(build_chain(40), options=EngineOptions(probes=True))
+    report = check_fmu(chain.build_chain(40), options=EngineOptions(probes=True))
     assert report.findings == ()
     info = dict(report.info)
     jac = dict(info["jacobian"]) if not isinstance(info["jacobian"], dict) else info["jacobian"]

@@ -21,7 +21,7 @@ from conformance.probes.api import Point, ProbeContext, ProbeSkipped
 from conformance.probes.endurance import KINDS, memory_grows
 from conformance.probes.endurance_run import FACT, PathRun, RunSettings, lap_points
 from conformance.runtime.callrecord import CallRecord
-from scenes.build import build_scene
+from tests.fixtures import build_scene
 
 ENDURANCE = ("DAE760", "DAE761", "DAE762")
 LATE_AFTER = 5000      # scenes/common/fmi3_framework.c: calls on one instance before it strikes

@@ -23,7 +23,7 @@ from conformance.probes.api import FmiError, Point, ProbeContext, ProbeSkipped
 from conformance.probes.common import renew_failed
 from conformance.runtime.instance import Instance, KnownNotSet, PointNotSet
 from conformance.runtime.layout import Layout
-from scenes.build import SCENES_DIR
+from tests.fixtures import SCENES_DIR
 
 OPTIONS = {r.code: r.option_values for r in default_catalogue()}
 U1, U2, Z1, Z2 = 7, 8, 5, 6   # SimpleDAE's inputs and algebraic variables

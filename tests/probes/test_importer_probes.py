@@ -19,7 +19,7 @@ from conformance.model.description import read_model_description
 from conformance.probes import event_indicators, importer_paths
 from conformance.probes.api import FmiError, Point, ProbeContext, ProbeSkipped
 from conformance.runtime.layout import Layout
-from scenes.build import SCENES_DIR
+from tests.fixtures import SCENES_DIR
 
 OPTIONS = {r.code: r.option_values for r in default_catalogue()}
 FAMILY = {**importer_paths.PROBES, **event_indicators.PROBES}

@@ -19,9 +19,7 @@ from conformance.probes.registry import PROBES
 from conformance.probes.sampling import near_points, start_point
 from conformance.runtime.callrecord import CallRecord
 from conformance.runtime.layout import Layout
-from scenes.build import build_scene
-from scenes.demo_legacy import FORMULATION_MANIFEST
-from tests.fixtures.defects.variants import variant
+from tests.fixtures import FORMULATION_MANIFEST, build_scene, variant
 
 CATALOGUE = default_catalogue()
 PROBE_CODES = {r.code for r in CATALOGUE if r.stage == "probe"}

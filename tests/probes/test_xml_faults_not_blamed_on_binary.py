@@ -10,7 +10,7 @@ import pytest
 
 from conformance.run.engine import EngineOptions, check_fmu
 from conformance.report.findings import Severity
-from tests.fixtures.defects.variants import variant
+from tests.fixtures import variant
 
 X = ('<Float64 name="x1" valueReference="1" causality="local" variability="continuous" '
      'initial="exact" ')

@@ -27,7 +27,7 @@ from conformance.report.findings import (
     evidence,
 )
 from conformance.model.layer import NOT_A_DAE_FMU
-from tests.fixturekit import all_cases, materialise
+from tests.fixtures import all_cases, materialise
 
 HERE = Path(__file__).resolve().parent
 EXPECTED = HERE / "expected"

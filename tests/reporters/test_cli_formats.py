@@ -9,7 +9,7 @@ from sarif.loader import load_sarif_file
 
 from conformance.commands.cli import main
 from conformance.reporters import REPORTER_BY_NAME
-from tests.fixturekit import all_cases, materialise
+from tests.fixtures import all_cases, materialise
 from tests.reporters.test_github import parse
 from tests.reporters.test_sarif import github_problems
 

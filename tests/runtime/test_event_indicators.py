@@ -16,7 +16,7 @@ from conformance.runtime.callrecord import CallRecord
 from conformance.runtime.layout import Layout
 from conformance.runtime.library import Library
 from conformance.runtime.modes import start_instance
-from scenes.build import build_scene
+from tests.fixtures import build_scene
 
 
 def _library(name: str, where: Path) -> Library:

@@ -17,7 +17,7 @@ from conformance.runtime.errors import FmiError
 from conformance.runtime.layout import Layout
 from conformance.runtime.library import Library
 from conformance.runtime.modes import start_initialization
-from scenes.build import build_scene
+from tests.fixtures import build_scene
 
 
 @pytest.fixture

@@ -16,15 +16,15 @@ import pytest
 from lxml import etree
 
 from conformance.model.manifest import MANIFEST, Manifest, read_manifest
-from conformance.model.description import MODEL_DESCRIPTION, ModelDescription, Unknown, read_model_description
+from conformance.model.description import (MODEL_DESCRIPTION, ModelDescription, Unknown,
+                                           read_model_description)
 from conformance.probes.api import FmiError
 from conformance.runtime.callrecord import CallRecord
 from conformance.runtime.instance import Dependency, Instance
 from conformance.runtime.layout import Layout
 from conformance.runtime.library import Library
 from conformance.runtime.modes import configure, start_instance
-from scenes.build import build_scene
-from scenes.Chain import chain
+from tests.fixtures import build_scene, chain
 
 
 class Opened:

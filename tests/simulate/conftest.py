@@ -12,7 +12,7 @@ from conformance.runtime.callrecord import CallRecord
 from conformance.runtime.layout import Layout
 from conformance.runtime.library import Library
 from conformance.intake.xmlsafe import parse_xml
-from scenes.build import build_scene
+from tests.fixtures import build_scene
 
 
 @pytest.fixture

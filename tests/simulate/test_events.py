@@ -14,7 +14,7 @@ import pytest
 
 from conformance.report.findings import thaw
 from conformance.commands.simulate import add_parser, run, simulate_fmu, summary
-from scenes.build import build_scene
+from tests.fixtures import build_scene
 from tests.simkit import sim_settings
 
 T1, T2 = math.log(2.0), 0.75   # the state event (x falls to 0.5) and the time event

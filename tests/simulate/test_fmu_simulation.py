@@ -10,7 +10,7 @@ import pytest
 from conformance.run.engine import EngineOptions, check_fmu
 from conformance.report.findings import thaw
 from conformance.run.simulate_fmu import simulate_fmu
-from scenes.build import build_scene
+from tests.fixtures import build_scene
 from tests.numerics.systems import ROBERTSON_REFERENCE, VAN_DER_POL_IMPASSE
 from tests.simkit import sim_settings
 

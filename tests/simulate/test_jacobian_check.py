@@ -15,7 +15,7 @@ from conformance.runtime.modes import start_instance
 from conformance.simulate.integrate import simulate_instance
 from conformance.simulate.jacobian_check import DerivativeCheck, choose_jacobian
 from conformance.simulate.system import DIRECTIONAL, FINITE_DIFFERENCES, FmuDae, FmuOde
-from scenes.build import build_scene
+from tests.fixtures import build_scene
 from tests.simkit import sim_settings
 
 OPTIONS = default_catalogue()["directional-derivative-mismatch"].option_values

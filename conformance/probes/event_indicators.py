@@ -244,7 +244,7 @@ def _noted(code: str, probe: Callable[..., Iterator[Violation]]) -> Callable[...
     simulation probes read it)."""
     def run(ctx: ProbeContext, **options: Any) -> Iterator[Violation]:
         for violation in probe(ctx, **options):
-            ctx.facts.setdefault(EVENT_INDICATOR_FAULT, f"{code}: {violation.message}")
+            ctx.facts.setdefault(EVENT_INDICATOR_FAULT, f"{code}: {violation.text}")
             yield violation
     run.__wrapped__ = probe  # type: ignore[attr-defined]
     run.__signature__ = inspect.signature(probe)  # type: ignore[attr-defined]

@@ -89,6 +89,11 @@ class Violation:
     subject: str | None = None
     rule: str | None = None
 
+    @property
+    def text(self) -> str:
+        """The message as one finding shows it: ``{subject}`` filled with the quoted subject."""
+        return self.message.replace("{subject}", f"'{self.subject}'" if self.subject else "")
+
 
 @dataclass(frozen=True, slots=True)
 class Finding:

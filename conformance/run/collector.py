@@ -70,8 +70,7 @@ class Collector:
         return tuple(sorted(set(out), key=Finding.sort_key))
 
     def _single(self, rule: RuleSpec, v: Violation) -> Finding:
-        message = v.message.replace("{subject}", f"'{v.subject}'" if v.subject else "")
-        return Finding(rule.code, rule.name, self.selection.severity[rule.code], message,
+        return Finding(rule.code, rule.name, self.selection.severity[rule.code], v.text,
                        v.location, v.evidence, v.subject)
 
     def _grouped(self, members: list[tuple[RuleSpec, Violation]]) -> Finding:

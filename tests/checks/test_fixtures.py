@@ -6,6 +6,7 @@ import pytest
 from conformance.run.engine import EngineOptions, check_fmu
 from conformance.report.findings import Severity
 from tests.fixtures import Case, all_cases, materialise
+from tests.reportkit import raw_placeholders
 
 CASES = all_cases()
 
@@ -23,6 +24,7 @@ def test_fixture(case: Case, tmp_path):
                        f"({f.location.file}:{f.location.line})" for f in report.findings)
     assert not extra and not missing, (
         f"{case.id}: extra {sorted(extra)}, missing {sorted(missing)}\nfindings:\n{detail}")
+    assert raw_placeholders(report) == []
     if case.kind == "pass":
         assert case.code not in every, f"{case.id}: the rule fired on its passing case\n{detail}"
     else:

@@ -9,6 +9,7 @@ from conformance.report.catalogue import default_catalogue
 from conformance.run.engine import EngineOptions, check_fmu
 from conformance.report.findings import Severity
 from tests.fixtures import DEFECTS, Defect, FIXTURES, SCENES_DIR, build_defect
+from tests.reportkit import raw_placeholders
 
 PROBE_RULES = [r for r in default_catalogue() if r.stage == "probe"]
 
@@ -22,6 +23,7 @@ def test_defect_is_caught_by_its_rule_only(defect: Defect):
     detail = "\n".join(f"  {f.severity} {f.code} {f.name}: {f.message}" for f in report.findings)
     assert found == expected, (f"{defect.id}: extra {sorted(found - expected)}, "
                                f"missing {sorted(expected - found)}\n{detail}")
+    assert raw_placeholders(report) == []
 
 
 @pytest.mark.parametrize("rule", PROBE_RULES, ids=[r.code for r in PROBE_RULES])

@@ -39,7 +39,7 @@ test: $(STAMP)
 
 # The mutation test of the engine with 20 times its examples and a random seed (minutes).
 fuzz: $(STAMP)
-	$(BIN)/python -m pytest -q -p no:cacheprovider tests/run/test_engine_properties.py --fuzz 20
+	$(BIN)/python -m pytest -q -p no:cacheprovider tests/run/test_engine_properties.py tests/run/test_engine_hostile_values.py --fuzz 20
 
 bench: $(STAMP)
 	$(BIN)/python -m bench.static_bench --out reports/bench

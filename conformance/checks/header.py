@@ -51,7 +51,7 @@ def _is_older_than_alpha1(version: str) -> bool:
     key = _semver_key(version)
     if key is None and _VERSION_LIKE.match(version):
         core = re.split(r"[-+]", version, maxsplit=1)[0].split(".")
-        key = _semver_key(".".join(str(int(c)) for c in (core + ["0", "0"])[:3]))
+        key = _semver_key(".".join(c.lstrip("0") or "0" for c in (core + ["0", "0"])[:3]))
     return key is not None and key < _ALPHA1_KEY
 
 

@@ -18,8 +18,9 @@ on top of fmpy), which records the call in progress, the FMI status and the FMU'
 """
 from __future__ import annotations
 
+import inspect
 from dataclasses import dataclass, field
-from typing import Any, Callable, Iterable, Mapping, Sequence
+from typing import Any, Callable, Iterable, Iterator, Mapping, Sequence
 
 import numpy as np
 
@@ -29,7 +30,8 @@ from ..model.description import ModelDescription
 from ..runtime.errors import FmiError, Unavailable
 from ..runtime.point import Evaluator, Point
 
-__all__ = ["Evaluator", "FmiError", "INFO_KEYS", "Point", "Probe", "ProbeContext", "ProbeSkipped"]
+__all__ = ["EVENT_INDICATOR_FAULT", "Evaluator", "FmiError", "INFO_KEYS", "ODE_DAE_FAULT", "Point",
+           "Probe", "ProbeContext", "ProbeSkipped", "noted"]
 
 
 # A probe that cannot run on this FMU raises ProbeSkipped; the message is the reason, reported in
@@ -68,8 +70,24 @@ Probe = Callable[..., Iterable[Violation]]
 
 # Facts one family leaves for another (families never import each other): the first finding of
 # the event-indicator probes, which the simulation probes read before blaming runs that
-# root-find on those indicators.
+# root-find on those indicators; the first finding of ode-dae-inconsistent, which the
+# trajectory comparison reads before leaving a gap at the initial point to it.
 EVENT_INDICATOR_FAULT = "event_indicators.fault"
+ODE_DAE_FAULT = "ode_dae.fault"
+
+
+def noted(fact: str, code: str, probe: Callable[..., Iterator[Violation]]
+          ) -> Callable[..., Iterator[Violation]]:
+    """``probe``, recording its first violation as ``"CODE: message"`` in ``ctx.facts[fact]``
+    (another family reads it; the signature stays the probe's, for its options)."""
+    def run(ctx: ProbeContext, **options: Any) -> Iterator[Violation]:
+        for violation in probe(ctx, **options):
+            ctx.facts.setdefault(fact, f"{code}: {violation.text}")
+            yield violation
+    run.__wrapped__ = probe  # type: ignore[attr-defined]
+    run.__signature__ = inspect.signature(probe)  # type: ignore[attr-defined]
+    run.__name__ = probe.__name__
+    return run
 
 # Keys a probe may put into the report's per-FMU ``info`` (through ``ctx.facts["info"]``),
 # read by the HTML reporter for its plots:

@@ -17,9 +17,8 @@ order (MS-06).
 """
 from __future__ import annotations
 
-import inspect
 import math
-from typing import Any, Callable, Iterator, Sequence
+from typing import Any, Iterator, Sequence
 
 import numpy as np
 
@@ -27,7 +26,7 @@ from ..report.findings import Location, Violation, evidence
 from ..runtime.instance import Instance, PointNotSet
 from ..runtime.layout import Layout
 from ..model.unknowns import Unknown
-from .api import EVENT_INDICATOR_FAULT, FmiError, Point, ProbeContext, ProbeSkipped
+from .api import EVENT_INDICATOR_FAULT, FmiError, Point, ProbeContext, ProbeSkipped, noted
 from .common import close, dae_of, error_evidence, layout_of, root_location, var_location
 
 
@@ -239,20 +238,7 @@ def _tolerance(layout: Layout, vr: int | None, x: float, y: float, rtol: float, 
             "atol": atol, "scale": "nominal or magnitude of the indicator"}
 
 
-def _noted(code: str, probe: Callable[..., Iterator[Violation]]) -> Callable[..., Any]:
-    """``probe``, recording its first violation in ``ctx.facts[EVENT_INDICATOR_FAULT]`` (the
-    simulation probes read it)."""
-    def run(ctx: ProbeContext, **options: Any) -> Iterator[Violation]:
-        for violation in probe(ctx, **options):
-            ctx.facts.setdefault(EVENT_INDICATOR_FAULT, f"{code}: {violation.text}")
-            yield violation
-    run.__wrapped__ = probe  # type: ignore[attr-defined]
-    run.__signature__ = inspect.signature(probe)  # type: ignore[attr-defined]
-    run.__name__ = probe.__name__
-    return run
-
-
 PROBES = {
-    "DAE732": _noted("DAE732", event_indicators_failed),
-    "DAE733": _noted("DAE733", event_indicators_inconsistent),
+    "DAE732": noted(EVENT_INDICATOR_FAULT, "DAE732", event_indicators_failed),
+    "DAE733": noted(EVENT_INDICATOR_FAULT, "DAE733", event_indicators_inconsistent),
 }

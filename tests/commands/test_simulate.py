@@ -142,3 +142,19 @@ def test_the_summary_gives_the_largest_residual_along_the_dae_run(tmp_path, caps
                 if "largest residual along the run" in line)
     value = float(line.split("largest residual along the run ")[1].split()[0])
     assert 0 <= value < 1e-5  # IDA kept 0 = g(x, w) to within its tolerance
+
+
+@pytest.mark.parametrize("scene, define", [
+    ("SimpleDAE", "DEFECT_ODE_DAE_INCONSISTENT"),        # a gap from t = 0 on
+    ("HelloWorldDAE", "DEFECT_ODE_DAE_INCONSISTENT"),
+    ("HelloWorldDAE", "DEFECT_LATE_ODE_DRIFT"),           # a gap from t = 0.5 on
+])
+def test_both_modes_decide_a_gap_themselves_at_any_time(scene, define, tmp_path, capsys):
+    """simulate --mode both runs no point probe: a gap already there at t = 0 is its own
+    verdict (ode-dae-trajectory-mismatch), printed, with exit 1, not left to a rule that does
+    not run."""
+    code = _main([str(variant(scene, defines=[define])), "--mode", "both",
+                  "-o", str(tmp_path / "dae.csv")])
+    out = capsys.readouterr().out
+    assert code == 1
+    assert "DAE805" in out and "ode-dae-trajectory-mismatch" in out

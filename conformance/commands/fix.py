@@ -29,12 +29,16 @@ from ..run.engine import check_fmu
 from ..run.options import EngineOptions, RuleSelection
 from .exit_codes import EXIT_FINDINGS, EXIT_OK, UsageError
 from ..report.findings import FmuReport, Report
-from ..fixes.apply import ALL, Outcome, fix, key
+from ..fixes.apply import ALL, ROUNDS, Outcome, fix, key
 from ..fixes.archive import Package
 from ..fixes.fixers import UNSAFE_FIXERS
 from ..intake.fmu import default_limits
 from .precommit import fmu_roots
 from ..reporters import console
+
+#: The group threshold of the checks fix runs: no grouping.
+UNGROUPED = sys.maxsize
+
 
 def _split(values: list[str] | None) -> tuple[str, ...]:
     return tuple(v.strip() for value in values or () for v in value.split(",") if v.strip())
@@ -66,7 +70,9 @@ def fix_fmu(source: Path, *, options: EngineOptions | None = None,
             unsafe: bool = False) -> Outcome:
     """The fixes for one FMU (nothing written): the safe ones proven by static re-checks; with
     ``unsafe``, then the fixes from the probes' observations, proven by re-checks with them."""
-    options = options or EngineOptions()
+    # Every violation its own finding, so that a fixer sees the evidence of each, not of the
+    # first of a group.
+    options = dataclasses.replace(options or EngineOptions(), group_threshold=UNGROUPED)
     static = dataclasses.replace(options, probes=False, probes_only=False)
     catalogue = default_catalogue()
     original = check_fmu(source, options=static, catalogue=catalogue)
@@ -81,7 +87,8 @@ def fix_fmu(source: Path, *, options: EngineOptions | None = None,
         safe.package.write(current)
         observed = check_fmu(current, options=dynamic, catalogue=catalogue)
     more = fix(source, safe.package, observed,
-               lambda p: check_fmu(p, options=dynamic, catalogue=catalogue), UNSAFE_FIXERS)
+               lambda p: check_fmu(p, options=dynamic, catalogue=catalogue), UNSAFE_FIXERS,
+               rounds=ROUNDS)
     seen = Counter(key(f) for f in original.findings)
     probed = tuple(f for f in observed.findings if key(f) not in seen)   # what the probes saw
     return Outcome(more.package, safe.applied + more.applied, safe.refused + more.refused,

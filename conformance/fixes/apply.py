@@ -49,9 +49,19 @@ class Outcome:
     original: FmuReport                     # the static check of the input
 
 
+#: Rounds of observe, repair, re-check one fixer may take before its claim must hold.
+ROUNDS = 6
+
+
 def fix(path: Path, package: Package, original: FmuReport,
-        recheck: Callable[[Path], FmuReport], fixers: Mapping[str, tuple] = FIXERS) -> Outcome:
-    """Run every fixer on ``package`` whose rules have findings in ``original``."""
+        recheck: Callable[[Path], FmuReport], fixers: Mapping[str, tuple] = FIXERS, *,
+        rounds: int = 1) -> Outcome:
+    """Run every fixer on ``package`` whose rules have findings in ``original``.
+
+    With ``rounds`` above 1 a fixer goes on to a fixpoint: when the re-check of its change shows
+    findings of the rules it repairs that were not there before (the probes observe at other
+    points once a claim is widened), it repairs those too, and so on, at most ``rounds`` times;
+    the changes of every round are then judged together against ``original``."""
     unsafe = [f for f in original.findings if f.name in UNSAFE]
     if unsafe:
         why = f"{unsafe[0].name}: the archive is not rewritten while check finds it unsafe"
@@ -64,32 +74,55 @@ def fix(path: Path, package: Package, original: FmuReport,
         if not findings:
             continue
         try:
-            change = fixer(package, findings)
-            if change is None:
-                continue
-            candidate = _apply(package, change)
+            candidate, report, changes = _to_fixpoint(path, package, findings, codes, fixer,
+                                                      recheck, rounds)
         except (NoFix, EditConflict, PackageError, ValueError) as exc:
             refused.append((name, str(exc)))
             continue
-        with tempfile.TemporaryDirectory(prefix="lsdae-fix-") as tmp:
-            out = Path(tmp) / (path.name or "fmu")
-            candidate.write(out)
-            report = recheck(out)
+        if not changes:
+            continue
         new = keys(report.findings) - baseline
-        still = set(keys(change.fixes)) & set(keys(report.findings))
+        claimed = [f for change in changes for f in change.fixes]
+        still = set(keys(claimed)) & set(keys(report.findings))
         stopped = sorted(set(current.rules_run) - set(report.rules_run))
         if stopped:   # a finding can vanish because its rule no longer runs: not a fix
             refused.append((name, f"rules would no longer run ({', '.join(stopped[:3])})"))
         elif new:
             first = next(iter(new))
-            refused.append((name, f"it would add a finding ({first[0]} on {first[2] or first[1]})"))
+            refused.append((name, f"it would add a finding ({first[0]} on {first[2] or first[1]})"
+                                  + (f" after {len(changes)} rounds" if len(changes) > 1 else "")))
         elif still:
             first = next(iter(still))
             refused.append((name, f"{first[0]} would still fire after it"))
         else:
             package, current = candidate, report
-            applied.append(change)
+            applied.extend(changes)
     return Outcome(package, tuple(applied), tuple(refused), current, original)
+
+
+def _to_fixpoint(path: Path, package: Package, findings: list[Finding], codes: tuple[str, ...],
+                 fixer: Callable, recheck: Callable[[Path], FmuReport], rounds: int
+                 ) -> tuple[Package, FmuReport | None, list[Change]]:
+    """Apply ``fixer`` and re-check, again on what the re-check still finds of ``codes``, until
+    it finds none or ``rounds`` are done: (the package, its re-check, the change of each
+    round)."""
+    changes: list[Change] = []
+    report: FmuReport | None = None
+    for _ in range(max(1, rounds)):
+        change = fixer(package, findings)
+        if change is None:
+            break
+        package = _apply(package, change)
+        changes.append(change)
+        with tempfile.TemporaryDirectory(prefix="lsdae-fix-") as tmp:
+            out = Path(tmp) / (path.name or "fmu")
+            package.write(out)
+            report = recheck(out)
+        left = [f for f in report.findings if f.code in codes]
+        if not left or keys(left) == keys(findings):
+            break   # nothing left of its kind, or nothing it can still change
+        findings = left
+    return package, report, changes
 
 
 def _apply(package: Package, change: Change) -> Package:

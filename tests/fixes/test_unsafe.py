@@ -1,18 +1,23 @@
 """Unsafe fixes from the probes' observations: they only widen a claim, and only on request."""
 from __future__ import annotations
 
+import zipfile
+from pathlib import Path
+
 import pytest
 
 from conformance.commands.cli import main
 from conformance.run.engine import EngineOptions, check_fmu
-from conformance.report.findings import Finding, Location, Severity, evidence
+from conformance.report.findings import Finding, FmuReport, Location, Severity, evidence
 from conformance.commands.fix import fix_fmu
-from conformance.fixes.apply import keys
+from conformance.fixes.apply import fix, keys
+from conformance.fixes.archive import Package
 from conformance.fixes.edits import apply_edits
 from conformance.fixes.fixers import UNSAFE_FIXERS
 from conformance.fixes.observed import add_observed_dependencies, find_path, observed_kinds
 from conformance.fixes.xmltext import element_tree
-from tests.fixtures import DEFECTS, build_defect
+from conformance.intake.fmu import default_limits
+from tests.fixtures import DEFECTS, build_defect, variant
 
 DYNAMIC = EngineOptions(probes=True, endurance="off")
 UNSAFE = sorted({c for codes, _ in UNSAFE_FIXERS.values() for c in codes})
@@ -99,3 +104,79 @@ def test_unsafe_fixes_remove_the_observed_fault_and_nothing_gets_worse(defect, t
 def test_unsafe_fixes_need_the_probes(tmp_path):
     source = build_defect(XML_DEFECTS[0])
     assert main(["fix", str(source), "--diff", "--unsafe-fixes", "--no-probes"]) == 2
+
+
+MANIFEST_PATH = "extra/org.fmi-standard.fmi-ls-dae/fmi-ls-manifest.xml"
+RESIDUAL = "/fmiDAEManifest/ModelStructure/Residual[1]"
+
+
+def _seen(vr: int) -> Finding:
+    return Finding("DAE744", "dependencies-kind-violated", Severity.ERROR, "m",
+                   Location(file=MANIFEST_PATH, path=RESIDUAL),
+                   evidence(known_value_reference=vr), subject=f"d(r)/d({vr})")
+
+
+def _report(*findings: Finding) -> FmuReport:
+    return FmuReport("fmu", "alpha1", findings, rules_run=("DAE744",))
+
+
+@pytest.mark.parametrize("rounds, applied", [(1, 0), (3, 2)])
+def test_a_fixer_goes_on_to_a_fixpoint_when_its_repair_reveals_more_of_its_kind(
+        rounds, applied, fmu):
+    """The re-check after the first repair (d(r)/d(2)) observes another false kind (d(r)/d(4)):
+    one round refuses the fix as adding a finding, a fixpoint repairs both."""
+    source = fmu("HelloWorldDAE")
+    rechecks = iter([_report(_seen(4)), _report()])
+    outcome = fix(source, Package(source, default_limits()), _report(_seen(2)),
+                  lambda _: next(rechecks), UNSAFE_FIXERS, rounds=rounds)
+    assert len(outcome.applied) == applied
+    if applied:
+        text = outcome.package.read(MANIFEST_PATH).decode()
+        assert 'dependencies="2 4 5" dependenciesKind="dependent dependent constant"' in text
+        assert not outcome.refused
+    else:
+        assert "it would add a finding (DAE744" in outcome.refused[0][1]
+
+
+def _robertson_false_kinds(derivatives: int, initial: bool) -> Path:
+    """Robertson declaring ``constant`` what is not: the first ``derivatives`` of the four
+    partials of der(y1), der(y2) in y2 and y3 (1e4 y3, 1e4 y2, ... vary), and with ``initial``
+    der(y1)'s InitialUnknown in y1 and y2 too."""
+    kinds = [["constant", "dependent", "dependent"], ["constant", "dependent", "dependent"]]
+    for k in range(derivatives):
+        kinds[k // 2][1 + k % 2] = "constant"
+    edits = [(f'<ContinuousStateDerivative valueReference="{vr}" dependencies="2 4 6" '
+              'dependenciesKind="constant dependent dependent"/>',
+              f'<ContinuousStateDerivative valueReference="{vr}" dependencies="2 4 6" '
+              f'dependenciesKind="{" ".join(kinds[n])}"/>') for n, vr in enumerate((3, 5))]
+    if initial:
+        edits.append(('<InitialUnknown valueReference="3" dependencies="2 4" '
+                      'dependenciesKind="dependent dependent"/>',
+                      '<InitialUnknown valueReference="3" dependencies="2 4" '
+                      'dependenciesKind="constant constant"/>'))
+    return variant("Robertson", manifest_edits=edits)
+
+
+@pytest.mark.parametrize("derivatives, initial", [(1, False), (4, False), (4, True)],
+                         ids=["one-kind", "four-kinds-grouped", "four-kinds-and-initial"])
+def test_every_false_constant_kind_is_repaired_and_the_result_is_a_fixpoint(
+        derivatives, initial, tmp_path):
+    """One false kind, or so many that the check groups them into one finding (a fixer needs
+    each one's evidence), in Continuous-Time and in Initialization Mode: all come out
+    ``dependent``, the check is clean of both rules, the binary is untouched, and fixing the
+    result again changes nothing."""
+    source = _robertson_false_kinds(derivatives, initial)
+    before = check_fmu(source, options=DYNAMIC)
+    assert "DAE744" in {f.code for f in before.findings}
+    assert ("DAE751" in {f.code for f in before.findings}) == initial
+    outcome = fix_fmu(source, options=DYNAMIC, unsafe=True)
+    assert not outcome.refused, outcome.refused
+    out = tmp_path / "fixed.fmu"
+    outcome.package.write(out)
+    after = check_fmu(out, options=DYNAMIC)
+    assert not {"DAE744", "DAE751"} & {f.code for f in after.findings}
+    assert not keys(after.findings) - keys(before.findings)
+    with zipfile.ZipFile(source) as a, zipfile.ZipFile(out) as b:
+        binaries = [n for n in a.namelist() if n.startswith("binaries/")]
+        assert binaries and all(a.read(n) == b.read(n) for n in binaries)
+    assert not fix_fmu(out, options=DYNAMIC, unsafe=True).package.modified

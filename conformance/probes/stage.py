@@ -33,7 +33,7 @@ from ..runtime.layout import Layout
 from ..runtime.library import Library
 from ..runtime.modes import start_initialization, start_instance
 from ..runtime.protocol import MEMORY_EXIT, Job, violation_json
-from .api import FmiError, ProbeContext, ProbeSkipped
+from .api import PLANNED, FmiError, ProbeContext, ProbeSkipped
 from .common import renew_failed
 from .job import ProbeJob
 from .registry import PROBES
@@ -78,7 +78,8 @@ class _Stage:
         return 0
 
     def _context(self, library: Library, layout: Layout) -> ProbeContext:
-        facts: dict[str, Any] = {"layout": layout, "library": library, "info": {}}
+        facts: dict[str, Any] = {"layout": layout, "library": library, "info": {},
+                                 PLANNED: frozenset(code for code, _, _ in self.payload.probes)}
         evaluators: dict[str, Any] = {}
         for mode in ("dae", "ode"):
             try:

@@ -148,6 +148,7 @@ def test_the_summary_gives_the_largest_residual_along_the_dae_run(tmp_path, caps
     ("SimpleDAE", "DEFECT_ODE_DAE_INCONSISTENT"),        # a gap from t = 0 on
     ("HelloWorldDAE", "DEFECT_ODE_DAE_INCONSISTENT"),
     ("HelloWorldDAE", "DEFECT_LATE_ODE_DRIFT"),           # a gap from t = 0.5 on
+    ("HelloWorldDAE", "DEFECT_STALE_STATES"),   # the ODE run's instance starts where the DAE's ended
 ])
 def test_both_modes_decide_a_gap_themselves_at_any_time(scene, define, tmp_path, capsys):
     """simulate --mode both runs no point probe: a gap already there at t = 0 is its own

@@ -18,8 +18,9 @@ Initialization Mode while the point is measured. ``max_instances`` bounds the in
 points: a point that would not fit is not measured, and one that runs out is dropped.
 The survey is measured once per FMU and mode (DAE mode: the manifest's list; ODE mode:
 modelDescription's, see :mod:`.initial_layout`) and kept in ``ctx.facts``; ``max_instances``
-and ``max_seconds`` bound the surveys of both modes together, DAE mode first. After a call
-returned fmi3Fatal no survey calls the FMU again (SM-04).
+bounds the surveys of both modes together, DAE mode first, and ``max_seconds`` each mode's (two
+modes stay within the probe time limit of binary-timed-out). After a call returned fmi3Fatal no
+survey calls the FMU again (SM-04).
 """
 from __future__ import annotations
 
@@ -136,6 +137,7 @@ def _run(ctx: ProbeContext, settings: SurveySettings, mode: str) -> InitialSurve
     per_point = 1 + numdiff.CALLS_PER_DIRECTION[MEASURING.method] * (
         colouring.count + MEASURING.directions)
     counter = ctx.facts.setdefault(COUNTER_FACT, InstanceCounter(settings))
+    counter.restart_clock()
     result.factory, result.counter = ctx.new_initialization, counter
     for point in points:
         need = per_point + (1 if result.directional else 0)

@@ -10,8 +10,7 @@ from __future__ import annotations
 
 from conformance.report.findings import Severity
 from conformance.run.engine import EngineOptions, check_fmu
-from tests.fixtures import variant
-from tests.fixtures.defects.simulation import ENERGY_INVARIANT
+from tests.fixtures import ENERGY_INVARIANT, variant
 
 POSITION_INVARIANT = (ENERGY_INVARIANT[0],
                       ENERGY_INVARIANT[1].replace('valueReference="8"', 'valueReference="2"'))

@@ -73,7 +73,7 @@ EVENT_INDICATOR_FAULT = "event_indicators.fault"
 
 # Keys a probe may put into the report's per-FMU ``info`` (through ``ctx.facts["info"]``),
 # read by the HTML reporter for its plots:
-#   "jacobian": {"rows": [names], "cols": [names],
+#   "jacobian": {"rows": [names], "cols": [names], "mode": "dae" | "ode",
 #                "declared": [[i, j], ...], "observed": [[i, j], ...]}
 #   "probe_errors": [{"rule": code, "entry": "d(g1)/d(y)", "error": float,
 #                     "tolerance": float}, ...]

@@ -47,6 +47,8 @@ from .jacobian import (
     Survey,
     base_point,
     build_layout,
+    in_mode,
+    per_mode,
     point_evidence,
     record_errors,
     run_survey,
@@ -63,32 +65,7 @@ log = logging.getLogger(__name__)
 # -------------------------------------------------------------------------------- the modes
 
 def _surveys(ctx: ProbeContext, *, min_points: int = 1) -> list[Survey]:
-    """The surveys of every mode the FMU has (DAE mode first), or ProbeSkipped naming, per
-    mode, why none has anything to compare."""
-    layout = ctx.facts.get("layout")
-    modes = getattr(layout, "modes", ("dae",)) or ("dae",)
-    found, reasons = [], []
-    for mode in modes:
-        try:
-            found.append(surveyed(ctx, min_points=min_points, mode=mode))
-        except ProbeSkipped as exc:
-            reasons.append(f"{MODE_NAMES[mode]}: {exc}" if len(modes) > 1 else str(exc))
-    if not found:
-        raise ProbeSkipped("; ".join(reasons))
-    return found
-
-
-def _where(s: Survey) -> dict:
-    """The mode of a survey and the file whose promises it verifies, for the evidence."""
-    file = s.layout.rows[0].location.file if s.layout is not None and s.layout.rows else None
-    return {"mode": MODE_NAMES[s.mode], "declared_in": file}
-
-
-def _in_mode(violations, s: Survey):
-    """The violations with the survey's mode added to message and evidence."""
-    for v in violations:
-        yield Violation(f"{v.message} ({MODE_NAMES[s.mode]})", v.location,
-                        evidence(_where(s), **dict(v.evidence)), subject=v.subject, rule=v.rule)
+    return per_mode(ctx, lambda mode: surveyed(ctx, min_points=min_points, mode=mode))
 
 
 # ------------------------------------------------------------------------------- the probes
@@ -98,7 +75,18 @@ def _against_fd(ctx: ProbeContext, s: Survey, which: str, code: str, *, rtol: fl
     """The steps both derivative probes share: the FMU's refusals, the entries finite
     differences do not confirm (recorded for the report's error plot), and their findings."""
     call, fmi = _CALLS[which]
-    failures = list(call_failures(s, call, mode=s.mode))
+    refused = next(((point, exc) for flag, point, exc in s.failures
+                    if flag == call and exc.after is None), None)
+    if refused is not None and s.mode == "ode":
+        # ODE mode gives total derivatives through the FMU's own solve of its algebraic
+        # equations: where that solve is singular they do not exist, and the FMU may rightly
+        # refuse them (as in Initialization Mode, initial-directional-derivative-mismatch)
+        point, exc = refused
+        first = f": {exc.log[0]}" if exc.log else ""
+        raise ProbeSkipped(f"{fmi} returns {exc.status} in ODE mode at point {point.label}"
+                           f"{first}; a total derivative may not exist where the FMU solves its "
+                           "own algebraic equations, so nothing is compared")
+    failures = list(call_failures(s, call))
     if not getattr(s, call) and not failures:
         raise ProbeSkipped(f"the FMU does not provide {call} derivatives")
     worst = mismatched_entries(s, which, rtol=rtol, margin=margin, ulps=ulps)
@@ -157,7 +145,7 @@ def directional_derivative_mismatch(ctx: ProbeContext, *, rtol: float,
             reasons.append(str(exc))
             continue
         surveys.append(s)
-        yield from _in_mode(found, s)
+        yield from in_mode(found, s)
     if not surveys:
         raise ProbeSkipped(reasons[0])
 
@@ -175,7 +163,7 @@ def adjoint_derivative_mismatch(ctx: ProbeContext, *, rtol: float, margin: float
             reasons.append(str(exc))
             continue
         ran += 1
-        yield from _in_mode(found, s)
+        yield from in_mode(found, s)
     if not ran:
         raise ProbeSkipped(reasons[0])
 
@@ -206,7 +194,7 @@ def dependency_undeclared(ctx: ProbeContext, *, rtol: float, margin: float,
                           ulps: float) -> Iterator[Violation]:
     """A partial derivative clearly non-zero for a known the dependencies leave out (MS-20)."""
     for s in _surveys(ctx):
-        yield from _in_mode(_undeclared(ctx, s, rtol=rtol, margin=margin, ulps=ulps), s)
+        yield from in_mode(_undeclared(ctx, s, rtol=rtol, margin=margin, ulps=ulps), s)
 
 
 def _undeclared(ctx: ProbeContext, s: Survey, *, rtol: float, margin: float,
@@ -258,7 +246,7 @@ def _reported_dependencies(ctx: ProbeContext, layout: JacobianLayout,
 def dependency_never_observed(ctx: ProbeContext, *, min_points: int) -> Iterator[Violation]:
     """A declared dependency whose function never moved at any sampling point."""
     for s in _surveys(ctx, min_points=min_points):
-        yield from _in_mode(_never_observed(s), s)
+        yield from in_mode(_never_observed(s), s)
 
 
 def _never_observed(s: Survey) -> Iterator[Violation]:
@@ -284,7 +272,7 @@ def dependencies_kind_violated(ctx: ProbeContext, *, rtol: float, margin: float,
     """A ``constant``/``fixed``/``tunable``/``discrete`` entry whose partial derivative changes
     between sampling points (MS-31: such an unknown is affine in that known)."""
     for s in _surveys(ctx, min_points=2):
-        yield from _in_mode(_kind_violated(s, rtol=rtol, margin=margin, ulps=ulps), s)
+        yield from in_mode(_kind_violated(s, rtol=rtol, margin=margin, ulps=ulps), s)
 
 
 def _kind_violated(s: Survey, *, rtol: float, margin: float,

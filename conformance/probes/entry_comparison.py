@@ -177,15 +177,7 @@ def entry_errors(worst: dict, layout: JacobianLayout) -> list[tuple[str, float, 
              w.items["tolerance"]) for (i, j), w in worst.items()]
 
 
-_CALLED_WITH = {
-    "dae": "in DAE mode with residuals, derivatives and outputs as unknowns and states, "
-           "algebraic variables and inputs as knowns (fmi-ls-dae allows both)",
-    "ode": "in ODE mode with the state derivatives and continuous outputs as unknowns and the "
-           "states and inputs as knowns (FMI 3.0 allows it in Continuous-Time Mode, PD-03)",
-}
-
-
-def call_failures(s: Survey, call: str, *, mode: str = "dae") -> Iterator[Violation]:
+def call_failures(s: Survey, call: str) -> Iterator[Violation]:
     """The first refusal of the FMU's derivative function, if any (one finding, not one per
     point)."""
     for flag, point, exc in s.failures:
@@ -193,7 +185,8 @@ def call_failures(s: Survey, call: str, *, mode: str = "dae") -> Iterator[Violat
             continue
         fn = "fmi3GetDirectionalDerivative" if call == "directional" else "fmi3GetAdjointDerivative"
         yield Violation(
-            f"{fn} fails {_CALLED_WITH[mode]}",
+            f"{fn} fails in DAE mode with residuals, derivatives and outputs as unknowns and "
+            "states, algebraic variables and inputs as knowns (fmi-ls-dae allows both)",
             evidence=evidence(call=exc.call, status=exc.status, log=list(exc.log)[:10],
                               point=point.label))
         return

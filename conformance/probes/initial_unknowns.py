@@ -37,7 +37,7 @@ from .entry_comparison import (
     undeclared_entries,
 )
 from .initial_survey import SETTINGS_FACT, InitialSurvey, SurveySettings, confirm, surveyed
-from .jacobian import PointSurvey, point_evidence
+from .jacobian import PointSurvey, per_mode, point_evidence
 
 __all__ = ["PROBES"]
 
@@ -45,19 +45,7 @@ MODES = {"dae": "DAE mode", "ode": "ODE mode"}
 
 
 def _surveys(ctx: ProbeContext, *, min_points: int = 1) -> list[InitialSurvey]:
-    """The surveys of every mode the FMU has (DAE mode first), or ProbeSkipped naming, per
-    mode, why none has anything to compare."""
-    layout = ctx.facts.get("layout")
-    modes = getattr(layout, "modes", ("dae",)) or ("dae",)
-    found, reasons = [], []
-    for mode in modes:
-        try:
-            found.append(surveyed(ctx, min_points=min_points, mode=mode))
-        except ProbeSkipped as exc:
-            reasons.append(f"{MODES[mode]}: {exc}" if len(modes) > 1 else str(exc))
-    if not found:
-        raise ProbeSkipped("; ".join(reasons))
-    return found
+    return per_mode(ctx, lambda mode: surveyed(ctx, min_points=min_points, mode=mode))
 
 
 def _where(s: InitialSurvey) -> dict:

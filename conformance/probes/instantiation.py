@@ -24,7 +24,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from ..model.description import ModelDescription, Variable
-from ..runtime.instance import GETTERS
+from ..runtime.records import GETTERS
 from .api import FmiError, ProbeContext
 from .common import new_instance
 

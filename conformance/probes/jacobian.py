@@ -15,10 +15,12 @@ from __future__ import annotations
 
 import logging
 from dataclasses import dataclass, field
+from typing import Callable, Iterable, Iterator, TypeVar
 
 import numpy as np
 
 from ..numerics import colouring as col
+from ..report.findings import Violation, evidence
 from ..numerics import measure, numdiff
 from .api import Evaluator, FmiError, Point, ProbeContext, ProbeSkipped
 from .common import renew
@@ -26,6 +28,7 @@ from .jacobian_layout import MODE_NAMES, JacobianLayout, build_layout
 
 log = logging.getLogger(__name__)
 
+S = TypeVar("S")
 FACT = "derivatives.survey"              # DAE mode; ODE mode under FACT + ".ode"
 MAX_PROBE_ERRORS = 200
 
@@ -205,7 +208,7 @@ def _publish_jacobian(ctx: ProbeContext, s: Survey) -> None:
         "rows": [r.name for r in s.layout.rows], "cols": [c.name for c in s.layout.cols],
         "declared": [[i, j] for i, j in zip(p.rows.tolist(), p.cols.tolist())
                      if s.layout.rows[i].explicit],
-        "observed": sorted([i, j] for i, j in observed)}
+        "observed": sorted([i, j] for i, j in observed), "mode": s.mode}
 
 
 def surveyed(ctx: ProbeContext, *, min_points: int = 1, mode: str = "dae") -> Survey:
@@ -217,6 +220,36 @@ def surveyed(ctx: ProbeContext, *, min_points: int = 1, mode: str = "dae") -> Su
         raise ProbeSkipped(f"{len(s.points)} sampling point(s) could be measured, "
                            f"{min_points} needed")
     return s
+
+
+def per_mode(ctx: ProbeContext, surveyed_in: Callable[[str], S]) -> list[S]:
+    """``surveyed_in(mode)`` for every mode the FMU has (DAE mode first; the runtime layout's
+    ``modes``), or ProbeSkipped naming, per mode, why none has anything to compare. A probe of
+    both modes runs on what it gets: one rule, one promise, whatever the mode."""
+    modes = getattr(ctx.facts.get("layout"), "modes", ("dae",)) or ("dae",)
+    found, reasons = [], []
+    for mode in modes:
+        try:
+            found.append(surveyed_in(mode))
+        except ProbeSkipped as exc:
+            reasons.append(f"{MODE_NAMES[mode]}: {exc}" if len(modes) > 1 else str(exc))
+    if not found:
+        raise ProbeSkipped("; ".join(reasons))
+    return found
+
+
+def mode_evidence(s: Survey) -> dict:
+    """The mode of a survey and the file whose promises it verifies, for the evidence."""
+    file = s.layout.rows[0].location.file if s.layout is not None and s.layout.rows else None
+    return {"mode": MODE_NAMES[s.mode], "declared_in": file}
+
+
+def in_mode(violations: Iterable[Violation], s: Survey) -> Iterator[Violation]:
+    """The violations of a survey with its mode added to message and evidence."""
+    for v in violations:
+        yield Violation(f"{v.message} ({MODE_NAMES[s.mode]})", v.location,
+                        evidence(mode_evidence(s), **dict(v.evidence)), subject=v.subject,
+                        rule=v.rule)
 
 
 def record_errors(ctx: ProbeContext, code: str, items: list[tuple[str, float, float]]) -> None:

@@ -13,21 +13,10 @@ import numpy as np
 from .errors import FmiError, Unavailable
 from .library import Library
 from .point import Point
-from .records import Dependency, DiscreteStates, KnownNotSet, PointNotSet
+from .records import GETTERS, Dependency, DiscreteStates, KnownNotSet, PointNotSet
 
 __all__ = ["Dependency", "DiscreteStates", "Instance", "KnownNotSet", "PointNotSet",
            "Unavailable"]
-
-# fmi3Get<type> and its C element type, by the XML element of the variable (SG-09)
-GETTERS: dict[str, tuple[str, Any]] = {
-    "Float32": ("fmi3GetFloat32", ctypes.c_float), "Float64": ("fmi3GetFloat64", ctypes.c_double),
-    "Int8": ("fmi3GetInt8", ctypes.c_int8), "UInt8": ("fmi3GetUInt8", ctypes.c_uint8),
-    "Int16": ("fmi3GetInt16", ctypes.c_int16), "UInt16": ("fmi3GetUInt16", ctypes.c_uint16),
-    "Int32": ("fmi3GetInt32", ctypes.c_int32), "UInt32": ("fmi3GetUInt32", ctypes.c_uint32),
-    "Int64": ("fmi3GetInt64", ctypes.c_int64), "UInt64": ("fmi3GetUInt64", ctypes.c_uint64),
-    "Enumeration": ("fmi3GetInt64", ctypes.c_int64), "Boolean": ("fmi3GetBoolean", ctypes.c_bool),
-    "String": ("fmi3GetString", ctypes.c_char_p),
-}
 
 # fmi3DependencyKind in the order of the C enum; fmi3Independent has no XML counterpart (MS-13)
 DEPENDENCY_KINDS = ("independent", "constant", "fixed", "tunable", "discrete", "dependent")

@@ -60,6 +60,7 @@ def start_value_not_applied(ctx: ProbeContext, *, rtol: float,
         element = f" (element {k}, {len(wrong)} of {len(h.start)} differ)" if len(h.start) > 1 \
             else ""
         fname = "fmi3GetInt64" if h.var.type == "Enumeration" else f"fmi3Get{h.var.type}"
+        tolerance = {"Float64": rtol, "Float32": float32_rtol}.get(h.var.type)  # else exact
         yield Violation(
             f"after fmi3InstantiateModelExchange, before any fmi3Set*, {fname} returns "
             f"{_show(h.held[k])} for {{subject}}{element}, whose XML start "
@@ -68,9 +69,7 @@ def start_value_not_applied(ctx: ProbeContext, *, rtol: float,
             evidence(value_reference=h.var.vr, type=h.var.type, initial=h.var.initial,
                      start=h.start[k], held=h.held[k], element=k if len(h.start) > 1 else None,
                      elements_differing=len(wrong), elements=len(h.start),
-                     state="Instantiated (no fmi3Set* called)", rtol=rtol
-                     if h.var.type == "Float64" else float32_rtol
-                     if h.var.type == "Float32" else None),
+                     state="Instantiated (no fmi3Set* called)", rtol=tolerance),
             subject=h.var.name)
 
 

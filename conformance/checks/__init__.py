@@ -25,13 +25,14 @@ from . import (
     model_structure,
     model_types,
     model_variables,
+    newer_drafts,
     residual,
 )
 
 REGISTRY: dict[str, Check] = {}
 for _module in (header, enable, algebraic, residual, dae_form, manifest_dependencies, manifest_lists,
                 model_variables, model_structure, attribute_values, index1, model_types,
-                model_names, model_references):
+                model_names, model_references, newer_drafts):
     for _code, _check in _module.CHECKS.items():
         if _code in REGISTRY:  # pragma: no cover - a defect caught by the tests
             raise RuntimeError(f"rule {_code} registered twice")

@@ -55,6 +55,12 @@ def _is_older_than_alpha1(version: str) -> bool:
     return key is not None and key < _ALPHA1_KEY
 
 
+def newer_than_alpha1(version: str) -> bool:
+    """Whether ``version`` is a strict semantic version that comes after 1.0.0-alpha.1."""
+    key = _semver_key(version)
+    return key is not None and key > _ALPHA1_KEY
+
+
 def _names_dae(folder: str) -> bool:
     """Whether a folder name has "dae" as a word: fmi-ls-dae, DAE, FmiLsDae; not daemon."""
     words = re.sub(r"([a-z0-9])([A-Z])", r"\1 \2", folder)

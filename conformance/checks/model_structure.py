@@ -1,8 +1,9 @@
-"""Static checks: the core FMI 3.0 ModelStructure rules that DAE use depends on (DAE510-DAE514).
+"""Static checks: the core FMI 3.0 ModelStructure rules that DAE use depends on (DAE510-DAE515).
 
 The ModelStructure of modelDescription.xml must resolve (DAE510) and list exactly the outputs,
 state derivatives and initial unknowns that the variables call for (DAE511-DAE513); a DAE FMU
-should also provide directional derivatives (DAE514). Each check is one linear pass over the
+is advised to provide directional derivatives (DAE514); an output that is itself a state and
+leaves itself out of its dependencies meets an open question of FMI 3.0 (DAE515, information). Each check is one linear pass over the
 ModelStructure, reusing the per-model analysis of :mod:`.model_analysis`. Unresolved value
 references are reported only by ``model-structure-unknown-vr``; the other rules skip them.
 """
@@ -205,10 +206,35 @@ def directional_derivatives_missing(ctx: CheckContext) -> Iterator[Violation]:
         subject=me.model_identifier)
 
 
+def output_state_self_dependency(ctx: CheckContext) -> Iterator[Violation]:
+    """DAE515 MS-20, MS-10: an <Output> that is itself a continuous state, with a dependencies
+    list that leaves itself out. A state is a known and the output is that known: whether the
+    list should name it is open (Reference-FMUs issue 657; FMI's development text adds that
+    importers must not rely on self-dependencies). Information, naming the question."""
+    if (model := ctx.model) is None:
+        return
+    states = set(model.state_vrs())
+    for u in model.unknowns("Output"):
+        if u.vr in states and u.dependencies is not None and u.vr not in u.dependencies:
+            var = model.by_vr.get(u.vr)
+            listed = " ".join(map(str, u.dependencies))
+            yield Violation(
+                "the output {subject} is itself a continuous state and its dependencies "
+                f'("{listed}") do not name it; FMI 3.0 does not say whether they should '
+                "(open question, Reference-FMUs issue 657): importers must not rely on a "
+                "self-dependency, and lsdae does not probe this output's own entry",
+                unknown_loc(u),
+                evidence(value_reference=u.vr, dependencies=list(u.dependencies),
+                         open_question="Reference-FMUs issue 657: should an output that is a "
+                                       "state depend on itself?"),
+                subject=var.name if var is not None else str(u.vr))
+
+
 CHECKS: dict[str, Check] = {
     "DAE510": model_structure_unknown_vr,
     "DAE511": model_structure_output_mismatch,
     "DAE512": model_structure_derivative_missing,
     "DAE513": model_structure_initial_unknown_mismatch,
     "DAE514": directional_derivatives_missing,
+    "DAE515": output_state_self_dependency,
 }

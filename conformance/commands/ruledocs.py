@@ -8,6 +8,11 @@ HEADER = """# lsdae rules
 
 Generated from `rules/*.toml` by `lsdae rules --format markdown > docs/rules.md`; do not edit.
 `lsdae explain CODE` shows the same text in a terminal.
+
+Each rule's severity rests on a word (*force*) and the digest id it comes from: must or shall
+give an error, should a warning, may, advice or an open question information; `interop` (the
+spec is silent or open, but named importers reject or misread it) a warning, and `lsdae` (lsdae
+could not read or check the FMU) an error.
 """
 
 
@@ -24,7 +29,8 @@ def _section(rule: RuleSpec) -> str:
     lines = [
         f"## {rule.code} `{rule.name}`",
         "",
-        f"**{rule.severity}** · stage {rule.stage} · {_drafts(rule)} · spec: {rule.spec}",
+        f"**{rule.severity}** ({rule.force}: {rule.force_spec}) · stage {rule.stage} · "
+        f"{_drafts(rule)} · spec: {rule.spec}",
         "",
         rule.summary,
         "",
@@ -49,9 +55,10 @@ def _section(rule: RuleSpec) -> str:
 
 
 def render_markdown(catalogue: Catalogue) -> str:
-    table = ["| code | name | severity | stage | summary |", "|---|---|---|---|---|"]
+    table = ["| code | name | severity | force | stage | summary |",
+             "|---|---|---|---|---|---|"]
     table += [f"| [{r.code}](#{r.code.lower()}-{r.name}) | `{r.name}` | {r.severity} | "
-              f"{r.stage} | {r.summary} |" for r in catalogue]
+              f"{r.force} | {r.stage} | {r.summary} |" for r in catalogue]
     drafts = ["| draft id | shape |", "|---|---|"]
     drafts += [f"| `{k}` | {v} |" for k, v in DRAFT_LABELS.items()]
     body = "\n\n".join(_section(r) for r in catalogue)

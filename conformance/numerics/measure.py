@@ -28,12 +28,15 @@ log = logging.getLogger(__name__)
 class Sources:
     """What can be called at one point: ``fun(delta)`` the unknowns (m,) shifted by ``delta``
     (n,); ``directional(seed)`` the FMU's ``J @ seed`` (m,); ``adjoint(v)`` the FMU's ``v @ J``
-    (n,); ``dd_columns`` (bool, (n,)) the knowns the FMU's derivatives accept."""
+    (n,); ``dd_columns`` (bool, (n,)) the knowns the FMU's derivatives accept; ``dd_rows``
+    (bool, (m,)) the unknowns they may be asked for (the others are measured by finite
+    differences only: ``directional`` gives NaN there, and ``adjoint`` ignores their seeds)."""
 
     fun: Function
     directional: Function | None = None
     adjoint: Function | None = None
     dd_columns: np.ndarray | None = None
+    dd_rows: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -104,6 +107,8 @@ def measure(sources: Sources, pattern: Pattern, colouring: Colouring, steps: np.
     fun, dd, adj = _Counter(sources.fun), _Counter(sources.directional), _Counter(sources.adjoint)
     active = (np.ones(n, dtype=bool) if sources.dd_columns is None
               else np.asarray(sources.dd_columns, dtype=bool))
+    rows_ok = (np.ones(m, dtype=bool) if sources.dd_rows is None
+               else np.asarray(sources.dd_rows, dtype=bool))
     f0 = fun(np.zeros(n))
     fd = coloured_differences(fun, pattern, colouring, steps, method=method, f0=f0)
     noise = ulps * _basis(pattern.rows, pattern.cols, fd.value, x, f0, m)
@@ -114,23 +119,25 @@ def measure(sources: Sources, pattern: Pattern, colouring: Colouring, steps: np.
     dd_vals = np.full(pattern.nnz, np.nan)
     if sources.directional is not None:
         dd_vals, moved, _ = coloured_products(dd, pattern, colouring, active)
+        dd_vals[~rows_ok[pattern.rows]] = np.nan
         for i, g in moved:
-            suspects.setdefault(i, set()).update(colouring.members(g).tolist())
+            if rows_ok[i]:
+                suspects.setdefault(i, set()).update(colouring.members(g).tolist())
     dot = _directions(fun, dd if sources.directional is not None else None,
                       adj if sources.adjoint is not None else None, pattern, colouring, fd,
                       dd_vals, steps, active, noise, rng, method, directions, suspicion, f0,
-                      suspects)
+                      suspects, rows_ok)
     adj_vals = np.full(pattern.nnz, np.nan)
     if sources.adjoint is not None:
         adj_vals = _coloured_adjoint(adj, pattern, row_colouring or colour_rows(pattern),
-                                     active, suspects)
+                                     active, suspects, rows_ok)
     keep = ~np.isin(pattern.rows, np.fromiter(suspects, dtype=np.intp, count=len(suspects)))
     table = [pattern.rows[keep], pattern.cols[keep], np.ones(int(keep.sum()), dtype=bool),
              fd.value[keep], fd.truncation[keep], fd.rounding[keep], fd.zero[keep],
              dd_vals[keep], adj_vals[keep]]
     if suspects:
         table = _localise(table, suspects, pattern, fun, dd, adj, sources, active, steps,
-                          method, f0)
+                          method, f0, rows_ok)
     basis = _basis(table[0], table[1], np.nan_to_num(table[3]), x, f0, m)
     calls = (("evaluate", fun.calls), ("directional", dd.calls), ("adjoint", adj.calls))
     return Entries(*table, f0=f0, basis=basis,
@@ -151,7 +158,8 @@ def _hidden(pattern: Pattern, colouring: Colouring, i: int) -> set[int]:
 
 
 def _directions(fun, dd, adj, pattern, colouring, fd, dd_vals, steps, active, noise, rng,
-                method, count, suspicion, f0, suspects) -> tuple[float, float, float] | None:
+                method, count, suspicion, f0, suspects, rows_ok
+                ) -> tuple[float, float, float] | None:
     """Step 3 of :func:`measure` (and the dot-product test along the first direction)."""
     dot = None
     fd_err = fd.truncation + fd.rounding * noise[pattern.rows]
@@ -162,12 +170,14 @@ def _directions(fun, dd, adj, pattern, colouring, fd, dd_vals, steps, active, no
         if dd is not None:
             known = np.nan_to_num(dd_vals)
             dd_s = dd(s * active)
-            bad |= np.abs(dd_s - predict(pattern, known, s * active)) > 1e-9 * (
-                predict_abs(pattern, known, s * active) + np.abs(dd_s)) + 1e-300
+            bad |= rows_ok & (np.abs(dd_s - predict(pattern, known, s * active)) > 1e-9 * (
+                predict_abs(pattern, known, s * active) + np.abs(dd_s)) + 1e-300)
             if k == 0 and adj is not None:
                 v = rng.uniform(0.5, 1.0, pattern.shape[0]) * rng.choice([-1.0, 1.0],
                                                                          pattern.shape[0])
-                a, b = float(v @ dd_s), float(np.nan_to_num(adj(v)) @ (s * active))
+                v = v * rows_ok
+                a, b = (float(v @ np.nan_to_num(dd_s)),
+                        float(np.nan_to_num(adj(v)) @ (s * active)))
                 dot = (a, b, float(np.abs(v) @ predict_abs(pattern, fd.value, s * active))
                        + abs(a) + abs(b))
         for i in np.flatnonzero(bad):
@@ -175,7 +185,7 @@ def _directions(fun, dd, adj, pattern, colouring, fd, dd_vals, steps, active, no
     return dot
 
 
-def _coloured_adjoint(adj, pattern, rows: Colouring, active, suspects) -> np.ndarray:
+def _coloured_adjoint(adj, pattern, rows: Colouring, active, suspects, rows_ok) -> np.ndarray:
     """Declared entries from one adjoint call per group of rows; a non-zero for a column none
     of the group's rows declares puts those rows under suspicion."""
     order = pattern.transpose_order()
@@ -187,11 +197,13 @@ def _coloured_adjoint(adj, pattern, rows: Colouring, active, suspects) -> np.nda
     for j, q in moved:
         if active[j]:
             for i in rows.members(q).tolist():
-                suspects.setdefault(i, set()).add(j)
-    return np.where(active[pattern.cols], values, np.nan)
+                if rows_ok[i]:
+                    suspects.setdefault(i, set()).add(j)
+    return np.where(active[pattern.cols] & rows_ok[pattern.rows], values, np.nan)
 
 
-def _localise(table, suspects, pattern, fun, dd, adj, sources, active, steps, method, f0):
+def _localise(table, suspects, pattern, fun, dd, adj, sources, active, steps, method, f0,
+              rows_ok):
     """Column-by-column values for the rows under suspicion: declared and candidate columns."""
     m, n = pattern.shape
     wanted = {i: cols | set(pattern.row(i).tolist()) for i, cols in suspects.items()}
@@ -204,7 +216,7 @@ def _localise(table, suspects, pattern, fun, dd, adj, sources, active, steps, me
         per_col[j] = (diff, dd_col)
     adj_rows = {}
     if sources.adjoint is not None:
-        for i in wanted:
+        for i in (i for i in wanted if rows_ok[i]):
             unit = np.zeros(m)
             unit[i] = 1.0
             adj_rows[i] = adj(unit)

@@ -94,7 +94,7 @@ def noted(fact: str, code: str, probe: Callable[..., Iterator[Violation]]
 
 # Keys a probe may put into the report's per-FMU ``info`` (through ``ctx.facts["info"]``),
 # read by the HTML reporter for its plots:
-#   "jacobian": {"rows": [names], "cols": [names],
+#   "jacobian": {"rows": [names], "cols": [names], "mode": "dae" | "ode",
 #                "declared": [[i, j], ...], "observed": [[i, j], ...]}
 #   "probe_errors": [{"rule": code, "entry": "d(g1)/d(y)", "error": float,
 #                     "tolerance": float}, ...]

@@ -163,10 +163,14 @@ def initial_residual_nonzero(ctx: ProbeContext, *, rtol: float, atol: float) -> 
                       else "default nominal 1")
             yield Violation(
                 f"the residual {{subject}} is {r:.6g} after initialisation in DAE mode, not "
-                f"zero (tolerance {tol:.3g}): the FMU's initial point is not consistent",
+                f"zero (tolerance {tol:.3g}): alpha.1 lets the FMU leave consistent "
+                "initialisation to the importer (DAE-14), which must then solve the residuals "
+                "for the algebraic variables, with the states and inputs as the FMU left them, "
+                "before its first step",
                 manifest_location(ctx, vr, ("Residual",)),
                 evidence(point="start", value=float(r), scale=scale, scale_source=source,
-                         tolerance=tol, rtol=rtol, atol=atol, started=started),
+                         tolerance=tol, rtol=rtol, atol=atol, started=started,
+                         importer_solves="g(t0, x0, w, u0) = 0 for the algebraic variables w"),
                 layout.name(vr))
 
 

@@ -1,7 +1,10 @@
 """Derivative probes (DAE740-DAE744): the FMU's partial derivatives and its dependencies.
 
 They compare, each with the tolerances of its catalogue entry, the Jacobian measured once per
-FMU by :func:`conformance.probes.jacobian.survey`:
+FMU and mode by :func:`conformance.probes.jacobian.survey`, in every mode the FMU has: DAE mode
+against the manifest's ``<ModelStructure>``, ODE mode (the switch off, or an ordinary Model
+Exchange FMU) against modelDescription's. One rule is one promise, whatever the mode: each
+finding names its mode in the message and the evidence.
 
 * ``directional-derivative-mismatch`` / ``adjoint-derivative-mismatch``: the FMU's entries
   against finite differences, and the dot-product test v(Js) = (vJ)s;
@@ -38,11 +41,14 @@ from .entry_comparison import (
 )
 from .jacobian import (
     FACT,
+    MODE_NAMES,
     JacobianLayout,
     Settings,
     Survey,
     base_point,
     build_layout,
+    in_mode,
+    per_mode,
     point_evidence,
     record_errors,
     run_survey,
@@ -56,6 +62,12 @@ __all__ = ["FACT", "PROBES", "JacobianLayout", "Settings", "Survey", "build_layo
 log = logging.getLogger(__name__)
 
 
+# -------------------------------------------------------------------------------- the modes
+
+def _surveys(ctx: ProbeContext, *, min_points: int = 1) -> list[Survey]:
+    return per_mode(ctx, lambda mode: surveyed(ctx, min_points=min_points, mode=mode))
+
+
 # ------------------------------------------------------------------------------- the probes
 
 def _against_fd(ctx: ProbeContext, s: Survey, which: str, code: str, *, rtol: float,
@@ -63,14 +75,27 @@ def _against_fd(ctx: ProbeContext, s: Survey, which: str, code: str, *, rtol: fl
     """The steps both derivative probes share: the FMU's refusals, the entries finite
     differences do not confirm (recorded for the report's error plot), and their findings."""
     call, fmi = _CALLS[which]
+    refused = next(((point, exc) for flag, point, exc in s.failures
+                    if flag == call and exc.after is None), None)
+    if refused is not None and s.mode == "ode":
+        # ODE mode gives total derivatives through the FMU's own solve of its algebraic
+        # equations: where that solve is singular they do not exist, and the FMU may rightly
+        # refuse them (as in Initialization Mode, initial-directional-derivative-mismatch)
+        point, exc = refused
+        first = f": {exc.log[0]}" if exc.log else ""
+        raise ProbeSkipped(f"{fmi} returns {exc.status} in ODE mode at point {point.label}"
+                           f"{first}; a total derivative may not exist where the FMU solves its "
+                           "own algebraic equations, so nothing is compared")
     failures = list(call_failures(s, call))
     if not getattr(s, call) and not failures:
         raise ProbeSkipped(f"the FMU does not provide {call} derivatives")
     worst = mismatched_entries(s, which, rtol=rtol, margin=margin, ulps=ulps)
     if which == "adj":
         worst = _single_entry_adjoint(ctx, s, worst)
-    record_errors(ctx, code, entry_errors(worst, s.layout)
-                  or closest_entries(s, which, rtol=rtol, margin=margin, ulps=ulps))
+    errors = (entry_errors(worst, s.layout)
+              or closest_entries(s, which, rtol=rtol, margin=margin, ulps=ulps))
+    record_errors(ctx, code, errors if s.mode == "dae" else
+                  [(f"{entry} [{MODE_NAMES[s.mode]}]", err, tol) for entry, err, tol in errors])
     found = list(entry_violations(
         s, worst, f"{fmi} gives {{subject}} that finite differences of the function do not "
         "confirm"))
@@ -91,9 +116,10 @@ def _single_entry_adjoint(ctx: ProbeContext, s: Survey, worst: dict) -> dict:
     layout = s.layout
     assert layout is not None
     kept = {}
+    ev = getattr(ctx, s.mode)
     for (i, j), w in worst.items():
         try:
-            value = float(ctx.dae.adjoint(  # type: ignore[union-attr]
+            value = float(ev.adjoint(  # type: ignore[union-attr]
                 base_point(layout, w.ps), [layout.rows[i].vr], [layout.cols[j].vr],
                 np.ones(1))[0])
         except (FmiError, ProbeSkipped):
@@ -111,16 +137,39 @@ def directional_derivative_mismatch(ctx: ProbeContext, *, rtol: float,
                                     margin: float, ulps: float) -> Iterator[Violation]:
     """fmi3GetDirectionalDerivative against finite differences of the function (DAE-50)."""
     ctx.facts[OPTIONS_FACT] = {"rtol": rtol, "margin": margin, "ulps": ulps}  # "confirmed"
-    found, _ = _against_fd(ctx, surveyed(ctx), "dd", "DAE740", rtol=rtol, margin=margin,
-                           ulps=ulps)
-    yield from found
+    surveys, reasons = [], []
+    for s in _surveys(ctx):
+        try:
+            found, _ = _against_fd(ctx, s, "dd", "DAE740", rtol=rtol, margin=margin, ulps=ulps)
+        except ProbeSkipped as exc:
+            reasons.append(str(exc))
+            continue
+        surveys.append(s)
+        yield from in_mode(found, s)
+    if not surveys:
+        raise ProbeSkipped(reasons[0])
 
 
 def adjoint_derivative_mismatch(ctx: ProbeContext, *, rtol: float, margin: float,
                                 ulps: float, dot_rtol: float) -> Iterator[Violation]:
     """fmi3GetAdjointDerivative against finite differences, and the dot-product test
     v(Js) = (vJ)s against the directional derivative (PD-06, DAE-50)."""
-    s = surveyed(ctx)
+    ran, reasons = 0, []
+    for s in _surveys(ctx):
+        try:
+            found = list(_adjoint(ctx, s, rtol=rtol, margin=margin, ulps=ulps,
+                                  dot_rtol=dot_rtol))
+        except ProbeSkipped as exc:
+            reasons.append(str(exc))
+            continue
+        ran += 1
+        yield from in_mode(found, s)
+    if not ran:
+        raise ProbeSkipped(reasons[0])
+
+
+def _adjoint(ctx: ProbeContext, s: Survey, *, rtol: float, margin: float, ulps: float,
+             dot_rtol: float) -> Iterator[Violation]:
     found, worst = _against_fd(ctx, s, "adj", "DAE741", rtol=rtol, margin=margin, ulps=ulps)
     yield from found
     if worst:
@@ -144,12 +193,19 @@ def adjoint_derivative_mismatch(ctx: ProbeContext, *, rtol: float, margin: float
 def dependency_undeclared(ctx: ProbeContext, *, rtol: float, margin: float,
                           ulps: float) -> Iterator[Violation]:
     """A partial derivative clearly non-zero for a known the dependencies leave out (MS-20)."""
-    s = surveyed(ctx)
+    for s in _surveys(ctx):
+        yield from in_mode(_undeclared(ctx, s, rtol=rtol, margin=margin, ulps=ulps), s)
+
+
+def _undeclared(ctx: ProbeContext, s: Survey, *, rtol: float, margin: float,
+                ulps: float) -> Iterator[Violation]:
     layout = s.layout
     assert layout is not None
     worst = undeclared_entries(s, rtol=rtol, margin=margin, ulps=ulps)
-    record_errors(ctx, "DAE742", [(layout.entry(i, j), abs(w.items["finite_difference"]),
-                                    w.items["tolerance"]) for (i, j), w in worst.items()])
+    suffix = "" if s.mode == "dae" else f" [{MODE_NAMES[s.mode]}]"
+    record_errors(ctx, "DAE742", [(layout.entry(i, j) + suffix,
+                                   abs(w.items["finite_difference"]), w.items["tolerance"])
+                                  for (i, j), w in worst.items()])
     for (i, j), w in sorted(worst.items()):
         yield Violation(
             "{subject} is clearly non-zero but the dependencies of the unknown do not list the "
@@ -158,13 +214,15 @@ def dependency_undeclared(ctx: ProbeContext, *, rtol: float, margin: float,
                 entry=layout.entry(i, j), unknown=layout.rows[i].name,
                 known=layout.cols[j].name, known_value_reference=layout.cols[j].vr, **w.items,
                 point=point_evidence(layout, w.ps)), subject=layout.entry(i, j))
-    yield from _reported_dependencies(ctx, layout)
+    yield from _reported_dependencies(ctx, layout, s.mode)
 
 
-def _reported_dependencies(ctx: ProbeContext, layout: JacobianLayout) -> Iterator[Violation]:
-    """fmi3GetVariableDependencies against the manifest, when the FMU offers it."""
+def _reported_dependencies(ctx: ProbeContext, layout: JacobianLayout,
+                           mode: str) -> Iterator[Violation]:
+    """fmi3GetVariableDependencies against the XML of the mode, when the FMU offers it."""
     me = ctx.model.model_exchange if ctx.model is not None else None
-    reader = getattr(ctx.dae, "variable_dependencies", None)
+    reader = getattr(getattr(ctx, mode), "variable_dependencies", None)
+    xml = "manifest" if mode == "dae" else "modelDescription.xml"
     if not (me and me.flag("providesPerElementDependencies") and callable(reader)):
         return
     declared = {i: {layout.cols[j].vr for j in layout.pattern.row(i)}
@@ -178,7 +236,7 @@ def _reported_dependencies(ctx: ProbeContext, layout: JacobianLayout) -> Iterato
         for vr in sorted((reported & set(knowns)) - listed):
             entry = f"d({layout.rows[i].name})/d({knowns[vr].name})"
             yield Violation(
-                "fmi3GetVariableDependencies reports {subject} but the manifest dependencies "
+                f"fmi3GetVariableDependencies reports {{subject}} but the {xml} dependencies "
                 "leave it out", layout.rows[i].location,
                 evidence(entry=entry, known_value_reference=vr,
                          source="fmi3GetVariableDependencies"),
@@ -187,7 +245,11 @@ def _reported_dependencies(ctx: ProbeContext, layout: JacobianLayout) -> Iterato
 
 def dependency_never_observed(ctx: ProbeContext, *, min_points: int) -> Iterator[Violation]:
     """A declared dependency whose function never moved at any sampling point."""
-    s = surveyed(ctx, min_points=min_points)
+    for s in _surveys(ctx, min_points=min_points):
+        yield from in_mode(_never_observed(s), s)
+
+
+def _never_observed(s: Survey) -> Iterator[Violation]:
     layout = s.layout
     assert layout is not None
     seen: dict[tuple[int, int], bool] = {}
@@ -209,7 +271,12 @@ def dependencies_kind_violated(ctx: ProbeContext, *, rtol: float, margin: float,
                                ulps: float) -> Iterator[Violation]:
     """A ``constant``/``fixed``/``tunable``/``discrete`` entry whose partial derivative changes
     between sampling points (MS-31: such an unknown is affine in that known)."""
-    s = surveyed(ctx, min_points=2)
+    for s in _surveys(ctx, min_points=2):
+        yield from in_mode(_kind_violated(s, rtol=rtol, margin=margin, ulps=ulps), s)
+
+
+def _kind_violated(s: Survey, *, rtol: float, margin: float,
+                   ulps: float) -> Iterator[Violation]:
     layout = s.layout
     assert layout is not None
     kind_of = {(i, j): k for i, j, k in zip(layout.pattern.rows.tolist(),

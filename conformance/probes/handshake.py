@@ -14,6 +14,7 @@ from ..report.findings import Location, Violation, evidence
 from .api import FmiError, ProbeContext, ProbeSkipped
 from .common import (close, error_evidence, layout_of, manifest_location, new_instance,
                      var_location)
+from .instantiation import Held, instantiated_values
 from ..runtime.instance import Instance, KnownNotSet
 from ..runtime.layout import Layout
 from ..runtime.library import Library
@@ -182,15 +183,22 @@ def reset_incomplete(ctx: ProbeContext, *, rtol: float, atol: float) -> Iterator
     inputs of a sampled point, resets, and reads back in Instantiated: a variable (or the
     switch) that kept its value is named. Only variables with a start value the static stage
     accepts are compared (a fresh instance is no reference: an FMU that keeps state across
-    instances is instances-not-independent's finding, not this one's)."""
+    instances is instances-not-independent's finding, not this one's). Where a fresh instance
+    already held another value than the XML start, the reset only has to restore that value:
+    start-value-not-applied reports the first cause."""
     layout = layout_of(ctx)
     if ctx.dae is None:
         raise ProbeSkipped("DAE mode could not be started (see enable-handshake)")
     vrs = [vr for vr in dict.fromkeys([*layout.states, *layout.inputs])
            if vr in layout.start and vr not in layout.flagged_start]
+    # Where a fresh instance already does not hold the XML start, start-value-not-applied
+    # reports the first cause: fmi3Reset only has to return to what instantiation left.
+    fresh = instantiated_values(ctx).by_vr()
     expected = [layout.start[vr] for vr in vrs]
+    instantiated = [_instantiated(fresh.get(vr), layout.start[vr]) for vr in vrs]
     switch = layout.enable if layout.enable_status == "ok" else None
     expected_switch = False if switch is not None else None
+    instantiated_switch = _instantiated(fresh.get(switch), False) if switch is not None else None
     if not vrs and switch is None:
         raise ProbeSkipped("no state or input with a start value, and no enable parameter")
     point = ctx.points[1] if len(ctx.points) > 1 else ctx.points[0]
@@ -207,22 +215,31 @@ def reset_incomplete(ctx: ProbeContext, *, rtol: float, atol: float) -> Iterator
                                ) from None
     finally:
         inst.free()  # type: ignore[attr-defined]
-    if switch is not None and got_switch != expected_switch:
+    if switch is not None and got_switch not in (expected_switch, instantiated_switch):
         yield Violation(
             f"after fmi3Reset the enable parameter {{subject}} is still {str(got_switch).lower()}"
             f": the FMU stays in DAE mode, and the next run starts in the wrong mode (DAE-11)",
             manifest_location(ctx, switch, ("Enable",)),
             evidence(after_reset=got_switch, start=expected_switch, point=point.label),
             subject=layout.name(switch))
-    for vr, a, b in zip(vrs, got, expected):
-        if not close(float(a), float(b), rtol=rtol, atol=atol, scale=layout.scale(vr)):
-            set_to = point.values.get(vr)
-            yield Violation(
-                "after fmi3Reset {subject} kept a value set before the reset instead of its "
-                "start value (MV-23)", var_location(ctx, vr),
-                evidence(after_reset=float(a), start=float(b), set_before=set_to,
-                         point=point.label, scale=layout.scale(vr)),
-                subject=layout.name(vr))
+    for vr, a, b, held in zip(vrs, got, expected, instantiated):
+        if any(close(float(a), float(v), rtol=rtol, atol=atol, scale=layout.scale(vr))
+               for v in (b, held)):
+            continue
+        yield Violation(
+            "after fmi3Reset {subject} kept a value set before the reset instead of its "
+            "start value (MV-23)", var_location(ctx, vr),
+            evidence(after_reset=float(a), start=float(b), set_before=point.values.get(vr),
+                     instantiated=float(held), point=point.label, scale=layout.scale(vr)),
+            subject=layout.name(vr))
+
+
+def _instantiated(held: Held | None, start: Any) -> Any:
+    """What fmi3Reset must restore: the XML start, or what a fresh instance held instead."""
+    if held is None or held.held is None or len(held.held) != 1:
+        return start
+    value = held.held[0]
+    return bool(value) if isinstance(start, bool) else float(value)
 
 
 PROBES = {

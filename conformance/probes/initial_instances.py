@@ -40,6 +40,11 @@ class InstanceCounter:
         self.deadline = time.monotonic() + settings.max_seconds
         self.why = ""
 
+    def restart_clock(self) -> None:
+        """A new ``max_seconds`` from now (each mode's survey gets its own time; the instances
+        are counted over all of them)."""
+        self.deadline = time.monotonic() + self.settings.max_seconds
+
     def spend(self) -> None:
         if self.left <= 0:
             self.why = f"max_instances = {self.settings.max_instances} ran out"

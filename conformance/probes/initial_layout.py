@@ -2,9 +2,10 @@
 declared sparsity (for :mod:`.initial_survey`).
 
 **Which list.** In DAE mode the manifest's ``<InitialUnknown>`` elements replace the
-modelDescription's (DAE-30): they are verified on DAE-mode instances. When the manifest lists
-none, whether the modelDescription's list is inherited in DAE mode is open (Q-02), so that list
-is verified where it surely applies: in ODE mode (DAE-11), if the FMU has one.
+modelDescription's (DAE-30): they are verified on DAE-mode instances, when the manifest lists
+any (whether DAE mode inherits the modelDescription's list when it lists none is open, Q-02).
+In ODE mode (the switch off, DAE-11, or an ordinary Model Exchange FMU) the modelDescription's
+list is verified, whether or not the manifest has its own.
 
 **Rows** are the scalar Float64 InitialUnknowns of that list. **Columns** are the knowns of
 Initialization Mode that can be set as start values (MS-11, SG-01): scalar Float64 inputs and
@@ -65,31 +66,30 @@ def start_time(model: ModelDescription, layout: Layout) -> float:
     return float(value) if value is not None and math.isfinite(value) else layout.start_time
 
 
-def choose_list(ctx: ProbeContext, layout: Layout) -> tuple[str, list[Unknown], str]:
-    """(mode, the InitialUnknown elements to verify, the reason when there are none)."""
-    listed = list(ctx.manifest.unknowns("InitialUnknown")) if ctx.manifest else []
-    if listed:
-        return "dae", listed, ""
+def choose_list(ctx: ProbeContext, layout: Layout, mode: str) -> tuple[list[Unknown], str]:
+    """(the InitialUnknown elements ``mode`` promises, the reason when there are none)."""
+    if mode not in layout.modes:
+        return [], ("the FMU has no usable enable parameter, hence no ODE mode" if mode == "ode"
+                    else "the FMU has no DAE mode")
+    if mode == "dae":
+        listed = list(ctx.manifest.unknowns("InitialUnknown")) if ctx.manifest else []
+        return listed, "" if listed else (
+            "the manifest lists no InitialUnknown (whether DAE mode inherits the "
+            "modelDescription's list is open, Q-02)")
     core = list(ctx.model.unknowns("InitialUnknown"))
-    if not core:
-        return "dae", [], "neither the manifest nor the modelDescription lists an InitialUnknown"
-    if layout.enable_status != "ok":
-        return "dae", [], (
-            "the manifest lists no InitialUnknown, and the FMU has no ODE mode in which the "
-            "modelDescription's list surely applies (whether DAE mode inherits it is open, Q-02)")
-    return "ode", core, ""
+    return core, "" if core else "the modelDescription lists no InitialUnknown"
 
 
-def build_initial_layout(ctx: ProbeContext, layout: Layout
-                         ) -> tuple[JacobianLayout | None, str, dict[int, float], str]:
-    """(the Jacobian layout of Initialization Mode, the mode, the start value of each known
+def build_initial_layout(ctx: ProbeContext, layout: Layout, mode: str
+                         ) -> tuple[JacobianLayout | None, dict[int, float], str]:
+    """(the Jacobian layout of Initialization Mode in ``mode``, the start value of each known
     that is not time, the reason when there is no layout)."""
     model = ctx.model
     if model is None:
-        return None, "dae", {}, "no model description"
-    mode, unknowns, reason = choose_list(ctx, layout)
+        return None, {}, "no model description"
+    unknowns, reason = choose_list(ctx, layout, mode)
     if not unknowns:
-        return None, mode, {}, reason
+        return None, {}, reason
     states = set(layout.states_for(mode))
     cols: list[Column] = []
     start: dict[int, float] = {}
@@ -110,9 +110,9 @@ def build_initial_layout(ctx: ProbeContext, layout: Layout
                            start_time(model, layout), math.inf))
     rows = _rows(model, unknowns, {c.vr for c in cols})
     if not rows or not cols:
-        return None, mode, {}, ("no scalar Float64 InitialUnknown, or no known that can be set "
-                                "in Initialization Mode, to differentiate")
-    return with_pattern(rows, cols), mode, start, ""
+        return None, {}, ("no scalar Float64 InitialUnknown, or no known that can be set in "
+                          "Initialization Mode, to differentiate")
+    return with_pattern(rows, cols, mode=mode), start, ""
 
 
 def _rows(model: ModelDescription, unknowns: list[Unknown], knowns: set[int]

@@ -16,7 +16,11 @@ sparsity and verifies the declared zeros, as in Continuous-Time Mode; the FMU's 
 derivatives, when it provides them, come from one more instance per point, left in
 Initialization Mode while the point is measured. ``max_instances`` bounds the instances over all
 points: a point that would not fit is not measured, and one that runs out is dropped.
-The survey is measured once per FMU and kept in ``ctx.facts``.
+The survey is measured once per FMU and mode (DAE mode: the manifest's list; ODE mode:
+modelDescription's, see :mod:`.initial_layout`) and kept in ``ctx.facts``; ``max_instances``
+bounds the surveys of both modes together, DAE mode first, and ``max_seconds`` each mode's (two
+modes stay within the probe time limit of binary-timed-out). After a call returned fmi3Fatal no
+survey calls the FMU again (SM-04).
 """
 from __future__ import annotations
 
@@ -42,8 +46,9 @@ from .jacobian import PointSurvey, Settings, Survey
 from .jacobian_layout import JacobianLayout
 from .sampling import near_points
 
-FACT = "initial.survey"
+FACT = "initial.survey"                   # DAE mode; ODE mode under FACT + ".ode"
 SETTINGS_FACT = "initial.settings"
+COUNTER_FACT = "initial.counter"          # the budget, shared by the modes' surveys
 OWNER = "initial-dependency-undeclared"   # the rule whose options set the survey
 SEED_SALT = 750
 MEASURING = Settings()                    # how to measure: as in Continuous-Time Mode
@@ -54,7 +59,6 @@ class InitialSurvey(Survey):
     """A :class:`~conformance.probes.jacobian.Survey` of Initialization Mode: also the mode
     and the file whose list was verified, and the instances spent."""
 
-    mode: str = "dae"
     file: str = ""
     instances: int = 0
     budget_stop: str = ""
@@ -78,19 +82,24 @@ def settings_of(ctx: ProbeContext) -> SurveySettings:
     return settings
 
 
-def initial_survey(ctx: ProbeContext) -> InitialSurvey:
-    """The Initialization-Mode Jacobian at every point, once per FMU (memoised)."""
-    memo = ctx.facts.get(FACT)
+def _key(mode: str) -> str:
+    return FACT if mode == "dae" else f"{FACT}.{mode}"
+
+
+def initial_survey(ctx: ProbeContext, mode: str = "dae") -> InitialSurvey:
+    """The Initialization-Mode Jacobian of ``mode`` at every point, once per FMU (memoised)."""
+    key = _key(mode)
+    memo = ctx.facts.get(key)
     if isinstance(memo, InitialSurvey):
         return memo
-    result = _run(ctx, settings_of(ctx))
-    ctx.facts[FACT] = result
+    result = _run(ctx, settings_of(ctx), mode)
+    ctx.facts[key] = result
     return result
 
 
-def surveyed(ctx: ProbeContext, *, min_points: int = 1) -> InitialSurvey:
-    """The survey, or ProbeSkipped with the reason it has nothing to compare."""
-    s = initial_survey(ctx)
+def surveyed(ctx: ProbeContext, *, min_points: int = 1, mode: str = "dae") -> InitialSurvey:
+    """The survey of ``mode``, or ProbeSkipped with the reason it has nothing to compare."""
+    s = initial_survey(ctx, mode)
     if s.layout is None:
         raise ProbeSkipped(s.reason)
     if len(s.points) < min_points:
@@ -106,13 +115,18 @@ def _points(t0: float, layout: Layout, start: dict[int, float], count: int,
     return [first, *near_points(first, layout, rng, count=max(0, count - 1))]
 
 
-def _run(ctx: ProbeContext, settings: SurveySettings) -> InitialSurvey:
+def _run(ctx: ProbeContext, settings: SurveySettings, mode: str) -> InitialSurvey:
     runtime_layout: Layout | None = ctx.facts.get("layout")  # type: ignore[assignment]
     if runtime_layout is None or ctx.new_initialization is None:
-        return InitialSurvey(None, "the binary is not loaded")
-    jl, mode, start, reason = build_initial_layout(ctx, runtime_layout)
+        return InitialSurvey(None, "the binary is not loaded", mode=mode)
+    jl, start, reason = build_initial_layout(ctx, runtime_layout, mode)
     if jl is None:
         return InitialSurvey(None, reason, mode=mode)
+    fatal = next((memo.fatal for memo in map(ctx.facts.get, map(_key, ("dae", "ode")))
+                  if isinstance(memo, InitialSurvey) and memo.fatal), "")
+    if fatal or getattr(ctx.facts.get("library"), "fatal", False):
+        fatal = fatal or "an FMI call returned fmi3Fatal: no instance may be called (SM-04)"
+        return InitialSurvey(None, fatal, mode=mode, fatal=fatal)
     me = ctx.model.model_exchange if ctx.model is not None else None
     result = InitialSurvey(jl, directional=bool(me and me.flag("providesDirectionalDerivatives")),
                            mode=mode, file=jl.rows[0].location.file or "")
@@ -122,7 +136,8 @@ def _run(ctx: ProbeContext, settings: SurveySettings) -> InitialSurvey:
     colouring = col.colour_columns(jl.pattern)
     per_point = 1 + numdiff.CALLS_PER_DIRECTION[MEASURING.method] * (
         colouring.count + MEASURING.directions)
-    counter = InstanceCounter(settings)
+    counter = ctx.facts.setdefault(COUNTER_FACT, InstanceCounter(settings))
+    counter.restart_clock()
     result.factory, result.counter = ctx.new_initialization, counter
     for point in points:
         need = per_point + (1 if result.directional else 0)

@@ -13,7 +13,9 @@ start values before fmi3EnterInitializationMode):
 * ``initial-directional-derivative-mismatch``: fmi3GetDirectionalDerivative in Initialization
   Mode against finite differences (PD-02, PD-03, PD-05, PD-06).
 
-The comparisons are those of the Continuous-Time Mode probes (``entry_comparison``): scaled by
+Each mode the FMU has is verified: DAE mode against the manifest's list, ODE mode against
+modelDescription's (:mod:`.initial_layout`); a finding names its mode. The comparisons are
+those of the Continuous-Time Mode probes (``entry_comparison``): scaled by
 the row scale ``S_i = sum_j |J_ij| * nominal_j``, a difference counts only above ``margin``
 times the finite-difference error estimate plus ``rtol`` times the scale. A finding names the
 InitialUnknown element (manifest or modelDescription, the list the instance follows) and its
@@ -35,11 +37,15 @@ from .entry_comparison import (
     undeclared_entries,
 )
 from .initial_survey import SETTINGS_FACT, InitialSurvey, SurveySettings, confirm, surveyed
-from .jacobian import PointSurvey, point_evidence
+from .jacobian import PointSurvey, per_mode, point_evidence
 
 __all__ = ["PROBES"]
 
 MODES = {"dae": "DAE mode", "ode": "ODE mode"}
+
+
+def _surveys(ctx: ProbeContext, *, min_points: int = 1) -> list[InitialSurvey]:
+    return per_mode(ctx, lambda mode: surveyed(ctx, min_points=min_points, mode=mode))
 
 
 def _where(s: InitialSurvey) -> dict:
@@ -74,7 +80,13 @@ def initial_dependency_undeclared(ctx: ProbeContext, *, rtol: float, margin: flo
     times it. ``points``, ``max_instances`` and ``max_seconds`` set the survey the other
     InitialUnknown probes read too."""
     ctx.facts.setdefault(SETTINGS_FACT, SurveySettings(points, max_instances, max_seconds))
-    s = surveyed(ctx)
+    for s in _surveys(ctx):
+        yield from _undeclared(s, rtol=rtol, margin=margin, ulps=ulps,
+                               confirm_factor=confirm_factor)
+
+
+def _undeclared(s: InitialSurvey, *, rtol: float, margin: float, ulps: float,
+                confirm_factor: float) -> Iterator[Violation]:
     layout = s.layout
     assert layout is not None
     worst = undeclared_entries(s, rtol=rtol, margin=margin, ulps=ulps)
@@ -110,14 +122,34 @@ def initial_dependencies_kind_violated(ctx: ProbeContext, *, rtol: float, margin
     points (MS-31), at the survey's step and at ``confirm_factor`` times it. Only ``constant``
     is a claim here: the other kinds are not allowed on an InitialUnknown, which the static
     rules report."""
-    layout = surveyed(ctx).layout
+    modes = []
+    for s in _surveys(ctx):
+        if any(k == "constant" and s.layout.rows[i].explicit
+               for i, k in zip(s.layout.pattern.rows.tolist(), s.layout.kinds)):
+            modes.append(s.mode)
+    if not modes:
+        return  # nothing declared constant: nothing to verify
+    found, reasons = False, []
+    for mode in modes:
+        try:
+            s = surveyed(ctx, min_points=2, mode=mode)
+        except ProbeSkipped as exc:
+            reasons.append(f"{MODES[mode]}: {exc}" if len(modes) > 1 else str(exc))
+            continue
+        found = True
+        yield from _kind_violated(s, rtol=rtol, margin=margin, ulps=ulps,
+                                  confirm_factor=confirm_factor)
+    if not found:
+        raise ProbeSkipped("; ".join(reasons))
+
+
+def _kind_violated(s: InitialSurvey, *, rtol: float, margin: float, ulps: float,
+                   confirm_factor: float) -> Iterator[Violation]:
+    layout = s.layout
     assert layout is not None
     constant = {(i, j): k for i, j, k in zip(layout.pattern.rows.tolist(),
                                              layout.pattern.cols.tolist(), layout.kinds)
                 if k == "constant" and layout.rows[i].explicit}
-    if not constant:
-        return  # nothing declared constant: nothing to verify
-    s = surveyed(ctx, min_points=2)
     for (i, j), c in kind_changes(s, constant, rtol=rtol, margin=margin, ulps=ulps).items():
         lo = _confirmed(s, c.lo[2], i, j, factor=confirm_factor, ulps=ulps)
         hi = _confirmed(s, c.hi[2], i, j, factor=confirm_factor, ulps=ulps)
@@ -127,8 +159,8 @@ def initial_dependencies_kind_violated(ctx: ProbeContext, *, rtol: float, margin
             continue
         yield Violation(
             f"{{subject}} is declared 'constant' by <InitialUnknown> '{layout.rows[i].name}' "
-            "but changes between points of Initialization Mode: the initial unknown is not "
-            "affine in the known", layout.rows[i].location,
+            f"but changes between points of Initialization Mode ({MODES.get(s.mode)}): the "
+            "initial unknown is not affine in the known", layout.rows[i].location,
             evidence(_where(s), entry=layout.entry(i, j), kind=c.kind,
                      known_value_reference=layout.cols[j].vr, smallest=c.lo[0],
                      largest=c.hi[0], tolerance=c.tolerance,
@@ -146,7 +178,22 @@ def initial_directional_derivative_mismatch(ctx: ProbeContext, *, rtol: float, m
     me = ctx.model.model_exchange if ctx.model is not None else None
     if not (me and me.flag("providesDirectionalDerivatives")):
         raise ProbeSkipped("the FMU does not provide directional derivatives")
-    s = surveyed(ctx)
+    ran, reasons = False, []
+    for s in _surveys(ctx):
+        try:
+            found = list(_directional(s, rtol=rtol, margin=margin, ulps=ulps,
+                                      confirm_factor=confirm_factor))
+        except ProbeSkipped as exc:
+            reasons.append(f"{MODES[s.mode]}: {exc}")
+            continue
+        ran = True
+        yield from found
+    if not ran:
+        raise ProbeSkipped("; ".join(reasons))
+
+
+def _directional(s: InitialSurvey, *, rtol: float, margin: float, ulps: float,
+                 confirm_factor: float) -> Iterator[Violation]:
     if s.interference:
         raise ProbeSkipped(s.interference)
     for what, point, exc in s.failures:
@@ -171,8 +218,9 @@ def initial_directional_derivative_mismatch(ctx: ProbeContext, *, rtol: float, m
         w.items.update(confirmed_finite_difference=again[0], confirmed_error_estimate=again[1],
                        confirm_factor=confirm_factor)
     for v in entry_violations(
-            s, worst, "fmi3GetDirectionalDerivative in Initialization Mode gives {subject} "
-            "that finite differences of the initial unknowns do not confirm"):
+            s, worst, "fmi3GetDirectionalDerivative in Initialization Mode "
+            f"({MODES.get(s.mode)}) gives {{subject}} that finite differences of the initial "
+            "unknowns do not confirm"):
         yield Violation(v.message, v.location, evidence(_where(s), **dict(v.evidence)),
                         subject=v.subject)
 

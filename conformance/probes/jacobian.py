@@ -1,7 +1,8 @@
 """The Jacobian survey shared by the derivative probes (derivatives.py, dgdw.py).
 
-The rows, columns and declared sparsity come from :mod:`.jacobian_layout`. At every sampling
-point the Jacobian is measured once (:func:`survey`, memoised in ``ctx.facts``): finite
+The rows, columns and declared sparsity come from :mod:`.jacobian_layout`, in DAE mode (the
+manifest's promises) or in ODE mode (modelDescription's). At every sampling point the Jacobian
+of a mode is measured once (:func:`survey`, memoised in ``ctx.facts`` per mode): finite
 differences of the function coloured by the declared sparsity, the FMU's directional and adjoint
 derivatives coloured the same way, the declared zeros verified with a few random directions,
 and every row under suspicion measured again column by column
@@ -14,19 +15,26 @@ from __future__ import annotations
 
 import logging
 from dataclasses import dataclass, field
+from typing import Callable, Iterable, Iterator, TypeVar
 
 import numpy as np
 
 from ..numerics import colouring as col
+from ..report.findings import Violation, evidence
 from ..numerics import measure, numdiff
 from .api import Evaluator, FmiError, Point, ProbeContext, ProbeSkipped
 from .common import renew
-from .jacobian_layout import JacobianLayout, build_layout
+from .jacobian_layout import MODE_NAMES, JacobianLayout, build_layout
 
 log = logging.getLogger(__name__)
 
-FACT = "derivatives.survey"
+S = TypeVar("S")
+FACT = "derivatives.survey"              # DAE mode; ODE mode under FACT + ".ode"
 MAX_PROBE_ERRORS = 200
+
+
+def fact_key(mode: str) -> str:
+    return FACT if mode == "dae" else f"{FACT}.{mode}"
 
 
 @dataclass(frozen=True)
@@ -52,6 +60,7 @@ class PointSurvey:
 class Survey:
     layout: JacobianLayout | None
     reason: str = ""
+    mode: str = "dae"           # the mode measured: "dae" or "ode"
     points: list[PointSurvey] = field(default_factory=list)
     failures: list[tuple[str, Point, FmiError]] = field(default_factory=list)
     directional: bool = False
@@ -67,6 +76,8 @@ class _At:
     def __init__(self, ev: Evaluator, layout: JacobianLayout, point: Point):
         self.ev, self.layout, self.point = ev, layout, point
         self.row_vrs = [r.vr for r in layout.rows]
+        self.dd_row_idx = np.flatnonzero(layout.dd_rows)
+        self.dd_row_vrs = [layout.rows[i].vr for i in self.dd_row_idx]
         self.dd_idx = np.flatnonzero(layout.dd_columns)
         self.dd_vrs = [layout.cols[j].vr for j in self.dd_idx]
         self.time = [j for j, c in enumerate(layout.cols) if c.role == "time"]
@@ -88,52 +99,60 @@ class _At:
         return np.asarray(self.ev.evaluate(self.at(delta), self.row_vrs), dtype=float)
 
     def directional(self, seed: np.ndarray) -> np.ndarray:
-        return np.asarray(self.ev.directional(self.base, self.row_vrs, self.dd_vrs,
-                                              np.asarray(seed, dtype=float)[self.dd_idx]), float)
+        """J @ seed from the FMU for the rows it may be asked for, NaN for the others."""
+        out = np.full(len(self.row_vrs), np.nan)
+        out[self.dd_row_idx] = self.ev.directional(
+            self.base, self.dd_row_vrs, self.dd_vrs,
+            np.asarray(seed, dtype=float)[self.dd_idx])
+        return out
 
     def adjoint(self, v: np.ndarray) -> np.ndarray:
         out = np.full(len(self.layout.cols), np.nan)
-        out[self.dd_idx] = self.ev.adjoint(self.base, self.row_vrs, self.dd_vrs,
-                                           np.asarray(v, dtype=float))
+        out[self.dd_idx] = self.ev.adjoint(self.base, self.dd_row_vrs, self.dd_vrs,
+                                           np.asarray(v, dtype=float)[self.dd_row_idx])
         return out
 
 
 # ------------------------------------------------------------------------------- the survey
 
-def survey(ctx: ProbeContext, settings: Settings = Settings()) -> Survey:
-    """The Jacobian measured at every sampling point, once per FMU (memoised in ctx.facts)."""
-    memo = ctx.facts.get(FACT)
+def survey(ctx: ProbeContext, settings: Settings = Settings(), mode: str = "dae") -> Survey:
+    """The Jacobian of ``mode`` measured at every sampling point, once per FMU (memoised in
+    ctx.facts)."""
+    memo = ctx.facts.get(fact_key(mode))
     if isinstance(memo, Survey):
         return memo
-    result = run_survey(ctx, settings)
-    ctx.facts[FACT] = result
+    result = run_survey(ctx, settings, mode)
+    ctx.facts[fact_key(mode)] = result
     _publish_jacobian(ctx, result)
     return result
 
 
-def run_survey(ctx: ProbeContext, settings: Settings) -> Survey:
+def run_survey(ctx: ProbeContext, settings: Settings, mode: str = "dae") -> Survey:
     """The survey itself, without the memo (the benchmark runs it with other settings)."""
-    layout, reason = build_layout(ctx)
-    if layout is None or ctx.dae is None:
-        failure = ctx.facts.get("dae_error")
-        return Survey(None, reason or "DAE mode could not be started" + (
-            f" ({failure})" if failure else ""))
+    layout, reason = build_layout(ctx, mode)
+    if getattr(ctx.facts.get("library"), "fatal", False):  # no call after fmi3Fatal (SM-04)
+        return Survey(layout=None, mode=mode, reason="an FMI call returned fmi3Fatal: no "
+                      "instance may be called (SM-04)")
+    if layout is None or getattr(ctx, mode) is None:
+        failure = ctx.facts.get(f"{mode}_error")
+        return Survey(layout=None, mode=mode, reason=reason or (
+            f"{MODE_NAMES[mode]} could not be started" + (f" ({failure})" if failure else "")))
     me = ctx.model.model_exchange if ctx.model is not None else None
-    use = settings.use_derivatives and me is not None
+    use = settings.use_derivatives and me is not None and bool(layout.dd_rows.any())
     result = Survey(layout, directional=bool(use and me.flag("providesDirectionalDerivatives")),
-                    adjoint=bool(use and me.flag("providesAdjointDerivatives")))
+                    adjoint=bool(use and me.flag("providesAdjointDerivatives")), mode=mode)
     colouring = (col.colour_columns(layout.pattern) if settings.coloured
                  else col.one_per_group(layout.pattern))
     row_colouring = (col.colour_rows(layout.pattern) if settings.coloured
                      else col.one_per_group(layout.pattern, rows=True))
-    rng = np.random.default_rng((ctx.seed, 740))
+    rng = np.random.default_rng((ctx.seed, 740) if mode == "dae" else (ctx.seed, 740, 1))
     start_time = min((p.t for p in ctx.points), default=0.0)
     for point in ctx.points:
-        failed = getattr(ctx.dae, "failure", None) is not None  # Terminated (SM-04)
-        if failed and renew(ctx, "dae") is None:
+        failed = getattr(getattr(ctx, mode), "failure", None) is not None  # Terminated (SM-04)
+        if failed and renew(ctx, mode) is None:
             break
-        measured = _measure_point(ctx.dae, layout, point, result, colouring, row_colouring,
-                                  rng, settings, start_time)
+        measured = _measure_point(getattr(ctx, mode), layout, point, result, colouring,
+                                  row_colouring, rng, settings, start_time)
         if measured is not None:
             result.points.append(measured)
     return result
@@ -161,7 +180,8 @@ def _measure_point(ev, layout, point, result, colouring, row_colouring, rng, set
             setattr(result, flag, False)
     result.probed = True
     sources = measure.Sources(at.fun, at.directional if result.directional else None,
-                          at.adjoint if result.adjoint else None, layout.dd_columns)
+                              at.adjoint if result.adjoint else None, layout.dd_columns,
+                              layout.dd_rows)
     try:
         entries = measure.measure(sources, layout.pattern, colouring, steps, at.x, rng,
                               row_colouring=row_colouring, method=settings.method,
@@ -174,7 +194,8 @@ def _measure_point(ev, layout, point, result, colouring, row_colouring, rng, set
 
 
 def _publish_jacobian(ctx: ProbeContext, s: Survey) -> None:
-    if s.layout is None:
+    """The report's ``jacobian`` plot: DAE mode's, or ODE mode's for an FMU without DAE mode."""
+    if s.layout is None or (s.mode != "dae" and ctx.dae is not None):
         return
     observed: set[tuple[int, int]] = set()
     for ps in s.points:
@@ -187,18 +208,48 @@ def _publish_jacobian(ctx: ProbeContext, s: Survey) -> None:
         "rows": [r.name for r in s.layout.rows], "cols": [c.name for c in s.layout.cols],
         "declared": [[i, j] for i, j in zip(p.rows.tolist(), p.cols.tolist())
                      if s.layout.rows[i].explicit],
-        "observed": sorted([i, j] for i, j in observed)}
+        "observed": sorted([i, j] for i, j in observed), "mode": s.mode}
 
 
-def surveyed(ctx: ProbeContext, *, min_points: int = 1) -> Survey:
-    """The survey, or ProbeSkipped with the reason it has nothing to compare."""
-    s = survey(ctx)
+def surveyed(ctx: ProbeContext, *, min_points: int = 1, mode: str = "dae") -> Survey:
+    """The survey of ``mode``, or ProbeSkipped with the reason it has nothing to compare."""
+    s = survey(ctx, mode=mode)
     if s.layout is None:
         raise ProbeSkipped(s.reason)
     if len(s.points) < min_points:
         raise ProbeSkipped(f"{len(s.points)} sampling point(s) could be measured, "
                            f"{min_points} needed")
     return s
+
+
+def per_mode(ctx: ProbeContext, surveyed_in: Callable[[str], S]) -> list[S]:
+    """``surveyed_in(mode)`` for every mode the FMU has (DAE mode first; the runtime layout's
+    ``modes``), or ProbeSkipped naming, per mode, why none has anything to compare. A probe of
+    both modes runs on what it gets: one rule, one promise, whatever the mode."""
+    modes = getattr(ctx.facts.get("layout"), "modes", ("dae",)) or ("dae",)
+    found, reasons = [], []
+    for mode in modes:
+        try:
+            found.append(surveyed_in(mode))
+        except ProbeSkipped as exc:
+            reasons.append(f"{MODE_NAMES[mode]}: {exc}" if len(modes) > 1 else str(exc))
+    if not found:
+        raise ProbeSkipped("; ".join(reasons))
+    return found
+
+
+def mode_evidence(s: Survey) -> dict:
+    """The mode of a survey and the file whose promises it verifies, for the evidence."""
+    file = s.layout.rows[0].location.file if s.layout is not None and s.layout.rows else None
+    return {"mode": MODE_NAMES[s.mode], "declared_in": file}
+
+
+def in_mode(violations: Iterable[Violation], s: Survey) -> Iterator[Violation]:
+    """The violations of a survey with its mode added to message and evidence."""
+    for v in violations:
+        yield Violation(f"{v.message} ({MODE_NAMES[s.mode]})", v.location,
+                        evidence(mode_evidence(s), **dict(v.evidence)), subject=v.subject,
+                        rule=v.rule)
 
 
 def record_errors(ctx: ProbeContext, code: str, items: list[tuple[str, float, float]]) -> None:

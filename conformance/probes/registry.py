@@ -17,11 +17,13 @@ if TYPE_CHECKING:
 
 FAMILIES: dict[str, tuple[str, ...]] = {
     "handshake": ("DAE710", "DAE711", "DAE712"),
+    "start_values": ("DAE713",),
     "basic": ("DAE720", "DAE721", "DAE722"),
     "evaluation": ("DAE723", "DAE724", "DAE725"),
     "derivatives": ("DAE740", "DAE741", "DAE742", "DAE743", "DAE744"),
     "dgdw": ("DAE745", "DAE746", "DAE747"),
     "simulation": ("DAE801", "DAE802", "DAE803", "DAE804", "DAE805"),
+    "invariants": ("DAE806",),
     "importer_paths": ("DAE730", "DAE731"),
     "event_indicators": ("DAE732", "DAE733"),
     "initial_unknowns": ("DAE750", "DAE751", "DAE752"),
@@ -34,6 +36,9 @@ FAMILY_OF: dict[str, str] = {code: family for family, codes in FAMILIES.items()
 
 #: The endurance probes: run last, at the ``--endurance`` level, counted call by call.
 ENDURANCE: frozenset[str] = frozenset(FAMILIES["endurance"])
+
+#: Run first: what a fresh instance holds is read before any other instance was freed.
+FIRST: frozenset[str] = frozenset(FAMILIES["start_values"])
 
 
 class _Probes(Mapping[str, "Probe"]):

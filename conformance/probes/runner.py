@@ -42,11 +42,10 @@ from typing import Any, Iterable, Sequence
 
 from ..report.catalogue import RuleSpec, default_catalogue
 from ..report.findings import Violation
-from ..model.layer import NOT_A_DAE_FMU
-from ..model.manifest import MANIFEST
+from ..model.layer import describe_fmu
 from ..runtime.host import host_platform_tuple, library_extension
 from .driver import RUNNER_RULES, Driver
-from .registry import ENDURANCE, FAMILY_OF
+from .registry import ENDURANCE, FAMILY_OF, FIRST
 
 log = logging.getLogger(__name__)
 
@@ -130,18 +129,20 @@ class _Run:
     # -- preconditions -------------------------------------------------------------------
 
     def _not_probeable(self) -> str | None:
+        """Why the binary cannot be probed at all, or None. An FMU without a readable manifest
+        (an ordinary Model Exchange FMU, or a DAE FMU whose manifest cannot be read) is probed
+        in ODE mode, by the rules that do not need the manifest (the engine leaves the others
+        out); a Co-Simulation or Scheduled Execution FMU is not probed: the probes drive the
+        Model Exchange interface."""
         ctx = self.ctx
         if ctx.model is None:
             return "no modelDescription.xml could be read"
-        if ctx.manifest is None:
-            if MANIFEST in ctx.names:
-                return "the manifest cannot be parsed: nothing to probe"
-            if not ctx.dae_layer:
-                return NOT_A_DAE_FMU
-            return f"no {MANIFEST}: nothing to probe"
         me = ctx.model.model_exchange
-        if me is None or not me.model_identifier:
-            return "the FMU has no <ModelExchange modelIdentifier=...> interface"
+        if me is None:
+            return (f"{describe_fmu(ctx.model)}, not Model Exchange: the probes drive the Model "
+                    "Exchange interface only")
+        if not me.model_identifier:
+            return "the <ModelExchange> element has no modelIdentifier: no binary to load"
         self.binary = f"binaries/{self.tuple}/{me.model_identifier}{library_extension()}"
         if self.binary not in ctx.names:
             return f"no binary for {self.tuple}"
@@ -165,9 +166,10 @@ class _Run:
                 self.skip([rule], f"does not apply to draft {self.ctx.draft}")
             else:
                 probes.append(rule)
-        # the endurance probes last: what sustained use does to the FMU (a late crash, state
-        # in C globals) must not change the other probes' verdicts
-        probes.sort(key=lambda rule: rule.code in ENDURANCE)
+        # the start values first, before any instance was freed; the endurance probes last:
+        # what sustained use does to the FMU (a late crash, state in C globals) must not change
+        # the other probes' verdicts
+        probes.sort(key=lambda rule: (rule.code in ENDURANCE, rule.code not in FIRST))
         tmp = tempfile.mkdtemp(prefix="lsdae-probe-")
         try:
             if self._extract(tmp):

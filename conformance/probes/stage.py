@@ -35,6 +35,7 @@ from ..runtime.modes import start_initialization, start_instance
 from ..runtime.protocol import MEMORY_EXIT, Job, violation_json
 from .api import PLANNED, FmiError, ProbeContext, ProbeSkipped
 from .common import renew_failed
+from .jacobian_layout import MODE_NAMES
 from .job import ProbeJob
 from .registry import PROBES
 from .sampling import near_points, points_info, start_point
@@ -81,12 +82,16 @@ class _Stage:
         facts: dict[str, Any] = {"layout": layout, "library": library, "info": {},
                                  PLANNED: frozenset(code for code, _, _ in self.payload.probes)}
         evaluators: dict[str, Any] = {}
+        modes: dict[str, str] = {}
         for mode in ("dae", "ode"):
             try:
                 evaluators[mode] = start_instance(library, mode)
+                modes[MODE_NAMES[mode]] = "probed"
             except (FmiError, ProbeSkipped) as exc:
                 evaluators[mode] = None
                 facts[f"{mode}_error"] = exc
+                modes[MODE_NAMES[mode]] = f"not probed: {exc}"
+        facts["info"]["modes"] = modes
         start = start_point(evaluators["dae"] or evaluators["ode"], layout,
                             facts.setdefault("start_nonfinite", {}))
         rng = np.random.default_rng(self.payload.seed)

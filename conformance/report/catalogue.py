@@ -22,8 +22,19 @@ else:  # pragma: no cover - exercised on 3.10 only
 STAGES = ("archive", "xml", "schema", "static", "probe", "simulation")
 NEEDS = ("model-description", "manifest", "dae-layer", "binary")
 FIX_KINDS = ("safe:", "unsafe:", "none:")
-REQUIRED = ("code", "name", "severity", "stage", "drafts", "spec", "summary", "rationale",
-            "bad", "good")
+REQUIRED = ("code", "name", "severity", "force", "force_spec", "stage", "drafts", "spec",
+            "summary", "rationale", "bad", "good")
+
+#: The word of the spec a rule's severity rests on, and the severity it gives (RFC 2119's
+#: reading, as the FMI text uses it). Two words are not the spec's: ``interop`` (the spec is
+#: silent or open, but named importers reject or misread what the FMU does: a warning) and
+#: ``lsdae`` (lsdae itself could not read or check the FMU: an error, so that an unchecked FMU
+#: never passes). ``force_spec`` gives the digest id(s) the word comes from.
+FORCE_SEVERITY: dict[str, Severity] = {
+    "must": Severity.ERROR, "shall": Severity.ERROR, "lsdae": Severity.ERROR,
+    "should": Severity.WARNING, "interop": Severity.WARNING,
+    "may": Severity.INFO, "advice": Severity.INFO, "open": Severity.INFO,
+}
 
 
 class CatalogueError(Exception):
@@ -47,6 +58,8 @@ class RuleSpec:
     options: tuple[tuple[str, Any], ...] = ()
     source: str = ""
     fix: str | None = None      # "safe: how", "unsafe: how" or "none: why no fix can exist"
+    force: str = ""             # the spec's word the severity rests on (FORCE_SEVERITY)
+    force_spec: str = ""        # the digest id(s) the word comes from
 
     @property
     def fix_kind(self) -> str | None:
@@ -113,6 +126,13 @@ def _rule(table: Mapping[str, Any], source: str) -> RuleSpec:
     for need in needs:
         if need not in NEEDS:
             raise CatalogueError(f"{source}: rule {table['code']} has unknown need {need!r}")
+    force = table["force"]
+    if force not in FORCE_SEVERITY:
+        raise CatalogueError(f"{source}: rule {table['code']} has force {force!r}; use one of "
+                             f"{', '.join(FORCE_SEVERITY)}")
+    if Severity.parse(table["severity"]) != FORCE_SEVERITY[force]:
+        raise CatalogueError(f"{source}: rule {table['code']} is {table['severity']}, but its "
+                             f"force {force!r} makes it {FORCE_SEVERITY[force]}")
     fix = table.get("fix")
     if fix is not None and (not isinstance(fix, str)
                             or not fix.startswith(FIX_KINDS) or not fix.split(":", 1)[1].strip()):
@@ -126,6 +146,7 @@ def _rule(table: Mapping[str, Any], source: str) -> RuleSpec:
         aliases=tuple(table.get("aliases", ())),
         options=tuple(sorted(table.get("options", {}).items())), source=source,
         fix=" ".join(fix.split()) if fix else None,
+        force=force, force_spec=" ".join(str(table["force_spec"]).split()),
     )
 
 

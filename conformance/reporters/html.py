@@ -222,7 +222,8 @@ def _plots(fmu: FmuReport, info: dict[str, Any]) -> list[str]:
     if not has_jacobian and not has_errors:
         return ["<h3>Probe plots</h3>", _no_plot(_no_probe_reason(fmu))]
     none = "No probe data for this plot: the probes that ran recorded none."
-    return ["<h3>DAE Jacobian: declared versus observed sparsity</h3>",
+    which = "ODE-mode" if has_jacobian and jacobian.get("mode") == "ode" else "DAE"
+    return [f"<h3>{which} Jacobian: declared versus observed sparsity</h3>",
             _plot(lambda: html_plots.sparsity(jacobian)) if has_jacobian else _no_plot(none),
             "<h3>Probe errors against tolerance</h3>",
             _plot(lambda: html_plots.probe_errors(entries)) if has_errors else _no_plot(none)]

@@ -115,7 +115,9 @@ def sparsity(jacobian: Mapping[str, Any]) -> Plot:
     caption = (f"{len(rows)}×{len(cols)} Jacobian: {len(declared)} entries declared, "
                f"{len(observed)} observed; {len(undeclared)} observed but not declared, "
                f"{len(only_declared)} declared but not observed.")
-    return Plot(uri, "Declared versus observed sparsity pattern of the DAE Jacobian. " + caption,
+    which = "ODE-mode" if jacobian.get("mode") == "ode" else "DAE"
+    return Plot(uri, f"Declared versus observed sparsity pattern of the {which} Jacobian. "
+                + caption,
                 caption)
 
 

@@ -13,7 +13,7 @@ import numpy as np
 from .errors import FmiError, Unavailable
 from .library import Library
 from .point import Point
-from .records import Dependency, DiscreteStates, KnownNotSet, PointNotSet
+from .records import GETTERS, Dependency, DiscreteStates, KnownNotSet, PointNotSet
 
 __all__ = ["Dependency", "DiscreteStates", "Instance", "KnownNotSet", "PointNotSet",
            "Unavailable"]
@@ -163,6 +163,16 @@ class Instance:
             self._fmi("fmi3GetFloat64", _vrs(vrs), len(vrs),
                       out.ctypes.data_as(ctypes.POINTER(ctypes.c_double)), len(vrs))
         return out
+
+    def get_typed(self, type_: str, vrs: Sequence[int], n: int) -> list[Any]:
+        """fmi3Get<type> of ``vrs`` holding ``n`` values in all (arrays serialized, SG-09), as
+        Python numbers, booleans or strings (a NULL string reads as None)."""
+        fname, ctype = GETTERS[type_]
+        values = (ctype * n)()
+        self._fmi(fname, _vrs(vrs), len(vrs), values, n)
+        if type_ == "String":
+            return [v.decode("utf-8", "replace") if v is not None else None for v in values]
+        return list(values)
 
     def set_float64(self, vrs: Sequence[int], values: Sequence[float] | np.ndarray) -> None:
         if vrs:

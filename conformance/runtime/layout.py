@@ -36,7 +36,9 @@ class Layout:
     outputs: tuple[int, ...]
     ode_outputs: tuple[int, ...]
     enable: int | None                   # value reference of the usable Boolean switch
-    enable_status: str                   # "ok", "absent" (a DAE-only FMU) or "unusable"
+    # "ok", "absent" (a DAE-only FMU), "unusable", or "no-layer": no manifest, an ordinary
+    # Model Exchange FMU, which has only ODE mode
+    enable_status: str
     enable_tunable: bool
     token: str
     model_identifier: str
@@ -53,6 +55,13 @@ class Layout:
     # DAE mode from the manifest, falling back to modelDescription's like the outputs
     event_indicators: tuple[int, ...] = ()
     ode_event_indicators: tuple[int, ...] = ()
+
+    @property
+    def modes(self) -> tuple[str, ...]:
+        """The modes an instance can be started in: ODE mode only without the layer, DAE mode
+        only for a DAE-only FMU, else both (an unusable switch leaves neither)."""
+        return {"ok": ("dae", "ode"), "absent": ("dae",), "no-layer": ("ode",)}.get(
+            self.enable_status, ())
 
     def states_for(self, mode: str) -> tuple[int, ...]:
         return self.states if mode == "dae" else self.ode_states
@@ -151,7 +160,9 @@ def _start_time(model: ModelDescription) -> float:
 
 def _enable(model: ModelDescription, manifest: Manifest | None) -> tuple[int | None, str, bool]:
     """(value reference, status, tunable) of the enable parameter, if it can be used."""
-    if manifest is None or not manifest.enables:
+    if manifest is None:
+        return None, "no-layer", False
+    if not manifest.enables:
         return None, "absent", False
     ref = manifest.enables[0]
     var = model.by_vr.get(ref.vr) if ref.vr is not None else None

@@ -35,7 +35,9 @@ def _free_quietly(inst: Instance) -> None:
 
 
 def _check_mode(layout: Layout, mode: str) -> None:
-    if mode == "ode" and layout.enable_status != "ok":
+    if mode == "dae" and layout.enable_status == "no-layer":
+        raise Unavailable("no fmi-ls-dae manifest was read: only ODE mode can be probed")
+    if mode == "ode" and layout.enable_status not in ("ok", "no-layer"):
         raise Unavailable("the FMU has no usable enable parameter, hence no ODE mode"
                            if layout.enable_status == "unusable" else
                            "the FMU has no enable parameter: it is permanently in DAE mode")

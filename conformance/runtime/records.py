@@ -1,11 +1,25 @@
 """What instance calls give back besides numbers: a variable dependency, the result of an event
-update, and the two ways setting a point can fail (which kind of known, which point)."""
+update, and the two ways setting a point can fail (which kind of known, which point); and which
+fmi3Get<type> reads a variable of each type, into which C type."""
 from __future__ import annotations
 
-from typing import NamedTuple, Sequence
+import ctypes
+from typing import Any, NamedTuple, Sequence
 
 from .errors import FmiError, Unavailable
 from .point import Point
+
+
+# fmi3Get<type> and its C element type, by the XML element of the variable (SG-09)
+GETTERS: dict[str, tuple[str, Any]] = {
+    "Float32": ("fmi3GetFloat32", ctypes.c_float), "Float64": ("fmi3GetFloat64", ctypes.c_double),
+    "Int8": ("fmi3GetInt8", ctypes.c_int8), "UInt8": ("fmi3GetUInt8", ctypes.c_uint8),
+    "Int16": ("fmi3GetInt16", ctypes.c_int16), "UInt16": ("fmi3GetUInt16", ctypes.c_uint16),
+    "Int32": ("fmi3GetInt32", ctypes.c_int32), "UInt32": ("fmi3GetUInt32", ctypes.c_uint32),
+    "Int64": ("fmi3GetInt64", ctypes.c_int64), "UInt64": ("fmi3GetUInt64", ctypes.c_uint64),
+    "Enumeration": ("fmi3GetInt64", ctypes.c_int64), "Boolean": ("fmi3GetBoolean", ctypes.c_bool),
+    "String": ("fmi3GetString", ctypes.c_char_p),
+}
 
 
 class Dependency(NamedTuple):

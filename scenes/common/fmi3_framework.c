@@ -49,6 +49,8 @@
  *   DEFECT_DAE_ONLY                always in DAE mode, as if the switch were stuck at true
  *   DEFECT_FATAL_DIRECTIONAL       fmi3GetDirectionalDerivative returns fmi3Fatal
  *   DEFECT_WRONG_ADJOINT           the adjoint alone doubles d(res[0])/d(w[0]) (DAE mode)
+ *   DEFECT_ODE_DIRECTIONAL_OFF     ODE mode, Continuous-Time Mode: the directional derivative's
+ *                                  d der(x[0])/d x[0] is 10 % too large (DAE mode stays right)
  *   DEFECT_ODE_DAE_INCONSISTENT    ODE mode solves g = 0.05 instead of g = 0
  *   DEFECT_RESET_KEEPS_SWITCH      fmi3Reset keeps the DAE switch and the first state
  *   DEFECT_INITIAL_UNDECLARED      Initialization Mode: y[0] also depends on x[NX-1] (its value
@@ -708,6 +710,15 @@ static fmi3Status partial_derivatives(fmi3Instance instance, const char *fn, int
     total = fmu_computes_w(c) && NW > 0;
     if (total && !factor_gw(c)) FAIL("dg/dw is singular at t=%g", c->d.t);
     if (!adj) {
+#ifdef DEFECT_ODE_DIRECTIONAL_OFF
+        double off = 0.0;   /* ODE mode, Continuous-Time Mode: 10 % of d der(x[0])/d x[0] */
+        if (!c->d.dae && c->d.state == ContinuousTimeMode && NX > 0) {
+            memset(c->s, 0, sizeof(double) * (size_t)NCOLS);
+            c->s[0] = 1.0;
+            directional(c, total);
+            off = 0.1 * c->v[0];
+        }
+#endif
         memset(c->s, 0, sizeof(double) * (size_t)NCOLS);
         for (j = 0; j < nK; j++) c->s[known_col(c, knowns[j])] += seed[j];
         directional(c, total);
@@ -721,6 +732,9 @@ static fmi3Status partial_derivatives(fmi3Instance instance, const char *fn, int
 #ifdef DEFECT_INITIAL_UNDECLARED
             if (c->d.state == InitializationMode && NX > 0 && NY > 0 && r == NX + NW)
                 sens[i] += 0.25 * c->s[NX - 1];
+#endif
+#ifdef DEFECT_ODE_DIRECTIONAL_OFF
+            if (r == 0) sens[i] += off * c->s[0];
 #endif
         }
     } else {

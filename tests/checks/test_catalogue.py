@@ -5,7 +5,9 @@ import re
 
 import pytest
 
-from conformance.report.catalogue import default_catalogue
+from conformance.report.catalogue import (FORCE_SEVERITY, CatalogueError, default_catalogue,
+                                          load_catalogue)
+from conformance.report.findings import Severity
 from conformance.checks import REGISTRY
 from conformance.commands.explain import explain_text
 from tests.fixtures import FIXTURES
@@ -28,6 +30,57 @@ def test_rule_entry_is_complete(rule):
     assert re.fullmatch(r"[a-z0-9]+(-[a-z0-9]+)*", rule.name)
     assert rule.spec.strip() and rule.summary and rule.rationale and rule.bad and rule.good
     assert rule.code in explain_text(rule)
+
+
+# Digest ids: AR-01, MV-23, DAE-14, Q-07, D-13, B0, A10, SG-MATRIX ... (see the digest's legend)
+DIGEST_ID = re.compile(r"\b(?:[A-Z]{1,3}-\d{2}|DAE-\d{2}|[QD]-\d{2}|B\d|A\d{1,2}|SG-MATRIX)\b")
+
+
+@pytest.mark.parametrize("rule", RULES, ids=[r.code for r in RULES])
+def test_severity_rests_on_the_spec_word_it_records(rule):
+    """Issue 21.4: must/shall -> error, should -> warning, may/advice/open -> info; interop (no
+    spec word, named importers reject it) -> warning; lsdae (lsdae could not check) -> error.
+    Every entry names the word and the digest id it comes from, and explain shows both."""
+    assert rule.force in FORCE_SEVERITY, rule.force
+    assert rule.severity == FORCE_SEVERITY[rule.force], (rule.code, rule.severity, rule.force)
+    if rule.force == "lsdae":
+        assert rule.force_spec.startswith("none:"), "lsdae rules rest on no spec id: say so"
+    else:  # a digest id, or "none:" and why there is none
+        assert DIGEST_ID.search(rule.force_spec) or (
+            rule.force_spec.startswith("none:") and rule.force in ("interop", "advice", "open")
+        ), (rule.code, rule.force_spec)
+    if rule.force == "interop":   # the importers, or how importers differ, are named
+        assert re.search(r"importer|fmi-rs|fmusim|solver", rule.force_spec + rule.rationale)
+    text = explain_text(rule)
+    assert f"Force:      {rule.force}, {rule.force_spec}" in text
+
+
+def test_the_force_words_cover_every_severity():
+    assert set(FORCE_SEVERITY.values()) == set(Severity)
+    assert {w for w, s in FORCE_SEVERITY.items() if s == Severity.ERROR} >= {"must", "shall"}
+    assert FORCE_SEVERITY["should"] == Severity.WARNING
+    assert {FORCE_SEVERITY[w] for w in ("may", "advice", "open")} == {Severity.INFO}
+
+
+@pytest.mark.parametrize("edit, words", [
+    (('force = "must"\n', ''), "lacks force"),
+    (('force = "must"\n', 'force = "nice"\n'), "has force 'nice'"),
+    (('severity = "error"\nforce = "must"\n', 'severity = "warning"\nforce = "must"\n'),
+     "makes it error"),
+])
+def test_the_loader_refuses_a_severity_that_is_not_its_word(tmp_path, edit, words):
+    text = (FIXTURES.parents[1] / "rules" / "probes.toml").read_text(encoding="utf-8")
+    assert edit[0] in text
+    (tmp_path / "probes.toml").write_text(text.replace(edit[0], edit[1], 1), encoding="utf-8")
+    with pytest.raises(CatalogueError, match=words):
+        load_catalogue(tmp_path)
+
+
+def test_the_two_known_cases_are_information():
+    assert CATALOGUE["initial-residual-nonzero"].severity == Severity.INFO
+    assert CATALOGUE["initial-residual-nonzero"].force == "may"
+    assert CATALOGUE["directional-derivatives-missing"].force == "advice"
+    assert CATALOGUE["directional-derivatives-missing"].severity == Severity.INFO
 
 
 def test_fixture_exemptions_name_catalogue_rules():

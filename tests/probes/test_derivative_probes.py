@@ -518,7 +518,11 @@ def test_larger_chain_fmu_is_clean_and_coloured_with_three_groups():
     from tests.fixtures import chain
 
     report = check_fmu(chain.build_chain(40), options=EngineOptions(probes=True))
-    assert report.findings == ()
+    # In ODE mode der(x) = w[0] - x depends on u through 40 links of a diagonally dominant
+    # chain, by about 4^-40: a real dependency no perturbation can show, which
+    # dependency-never-observed says, as information, and nothing else.
+    assert {(f.code, dict(f.evidence).get("mode")) for f in report.findings} <= {
+        ("DAE743", "ODE mode")}
     info = dict(report.info)
     jac = dict(info["jacobian"]) if not isinstance(info["jacobian"], dict) else info["jacobian"]
     assert len(jac["rows"]) == 42 and len(jac["cols"]) == 43

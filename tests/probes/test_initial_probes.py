@@ -184,8 +184,8 @@ def test_clean_twin_triggers_nothing(seed):
 
 def test_layout_knows_the_knowns_of_initialization_mode():
     ctx = make_ctx()
-    layout, mode, start, reason = build_initial_layout(ctx, ctx.facts["layout"])
-    assert (mode, reason) == ("dae", "")
+    layout, start, reason = build_initial_layout(ctx, ctx.facts["layout"], "dae")
+    assert (layout.mode, reason) == ("dae", "")
     assert [(c.name, c.role) for c in layout.cols] == [
         ("p", "parameter"), ("x", "state"), ("u", "input"), ("time", "time")]
     assert start == {1: 2.0, 2: 0.5, 6: 0.3}     # no w (approx), no constant k, no enable
@@ -237,20 +237,30 @@ def test_missing_start_time_dependency_is_undeclared():
 
 
 def test_hidden_dependency_behind_a_declared_column_is_found():
-    # y also depends on p; p shares a colour group with the columns y declares
-    twin = Twin(extra=lambda k, t: {7: 0.2 * k.get(1, 2.0) ** 2})
-    result = found(make_ctx(twin=twin, manifest_edits=_drop(
-        7, 'dependencies="2 6" dependenciesKind="constant constant"',
-        'dependencies="2 6" dependenciesKind="dependent dependent"')))
-    assert set(result) == {"DAE750"}
-    assert [v.subject for v in result["DAE750"]] == ["d(y)/d(p)"]
-
-
-def test_a_row_without_dependencies_claims_nothing():
+    # y also depends on p; p shares a colour group with the columns y declares. The twin does
+    # it in both modes, and both lists leave p out: one finding per mode, at its own element.
     twin = Twin(extra=lambda k, t: {7: 0.2 * k.get(1, 2.0) ** 2})
     ctx = make_ctx(twin=twin, manifest_edits=_drop(
-        7, 'dependencies="2 6" dependenciesKind="constant constant"', ""))
-    assert found(ctx) == {}
+        7, 'dependencies="2 6" dependenciesKind="constant constant"',
+        'dependencies="2 6" dependenciesKind="dependent dependent"'), md_edits=_drop(
+        7, 'dependencies="2 6" dependenciesKind="constant constant"',
+        'dependencies="2 6" dependenciesKind="dependent dependent"'))
+    result = found(ctx)
+    assert set(result) == {"DAE750"}
+    assert [(v.subject, dict(v.evidence)["mode"], v.location.file) for v in result["DAE750"]] \
+        == [("d(y)/d(p)", "DAE mode", ctx.manifest.file),
+            ("d(y)/d(p)", "ODE mode", ctx.model.file)]
+
+
+@pytest.mark.parametrize("where", ["manifest", "model", "both"])
+def test_a_row_without_dependencies_claims_nothing(where):
+    # the mode whose row still claims "2 6" reports p; the one without dependencies does not
+    twin = Twin(extra=lambda k, t: {7: 0.2 * k.get(1, 2.0) ** 2})
+    drop = _drop(7, 'dependencies="2 6" dependenciesKind="constant constant"', "")
+    ctx = make_ctx(twin=twin, manifest_edits=drop if where != "model" else (),
+                   md_edits=drop if where != "manifest" else ())
+    modes = {dict(v.evidence)["mode"] for v in found(ctx).get("DAE750", [])}
+    assert modes == {"manifest": {"ODE mode"}, "model": {"DAE mode"}, "both": set()}[where]
 
 
 def test_a_known_that_cannot_move_is_never_blamed():
@@ -317,7 +327,7 @@ def test_fatal_stops_the_survey_at_once():
     twin = Fatal()
     skipped: dict[str, str] = {}
     assert found(make_ctx(twin=twin), skipped) == {}
-    assert len(twin.opened) == 4                     # no instance after the fatal call
+    assert len(twin.opened) == 4           # no instance after the fatal call, in either mode
     assert set(skipped) == set(I.PROBES) and all("SM-04" in r for r in skipped.values())
 
 
@@ -329,15 +339,20 @@ def test_no_directional_derivatives_skips_only_that_rule():
 
 # ------------------------------------------------------------------------ what cannot run
 
-@pytest.mark.parametrize("refuse, words", [
-    (("set",), "rejects the start values"),
-    (("init-dae",), "DAE-14"),
-])
-def test_a_refusal_is_a_reason_to_skip_never_a_finding(refuse, words):
+def test_a_refusal_is_a_reason_to_skip_never_a_finding():
     skipped: dict[str, str] = {}
-    assert found(make_ctx(twin=Twin(refuse=refuse)), skipped) == {}
+    assert found(make_ctx(twin=Twin(refuse=("set",))), skipped) == {}
     assert set(skipped) == set(I.PROBES)
-    assert all(words in reason for reason in skipped.values()), skipped
+    assert all("rejects the start values" in reason for reason in skipped.values()), skipped
+
+
+def test_a_refused_dae_initialization_leaves_ode_mode_verified():
+    # DAE-14: alpha.1 lets the FMU refuse DAE mode in Initialization Mode; ODE mode's list is
+    # still verified, and nothing is reported
+    skipped: dict[str, str] = {}
+    twin = Twin(refuse=("init-dae",))
+    assert found(make_ctx(twin=twin), skipped) == {}
+    assert skipped == {} and {mode for mode, _, _ in twin.opened} == {"ode"}
 
 
 @pytest.mark.parametrize("budget, words", [
@@ -381,7 +396,7 @@ def test_without_manifest_list_and_without_ode_mode_nothing_is_claimed():
 
 def test_not_finite_start_value_is_not_sampled():
     ctx = make_ctx(md_edits=[('start="0.3"/>', 'start="nan"/>')])
-    layout, _, start, _ = build_initial_layout(ctx, ctx.facts["layout"])
+    layout, start, _ = build_initial_layout(ctx, ctx.facts["layout"], "dae")
     assert "u" not in [c.name for c in layout.cols] and 6 not in start
     survey = initial_survey(ctx)
     assert survey.points and all(math.isfinite(v) for ps in survey.points for v in ps.x)

@@ -110,19 +110,49 @@ def test_no_probes_option_skips_with_its_own_reason():
     assert set(_probe_skips(report).values()) == {"probes turned off (--no-probes)"}
 
 
-def test_unparseable_manifest_leaves_nothing_to_probe():
+MANIFEST_PROBES = {r.code for r in CATALOGUE if r.stage == "probe" and "manifest" in r.needs}
+ODE_PROBES = PROBE_CODES - MANIFEST_PROBES     # the ODE-mode contract of any ME FMU
+
+
+def test_the_ode_contract_rules_need_no_manifest():
+    assert {CATALOGUE[n].code for n in runner.RUNNER_RULES} <= ODE_PROBES
+    for name in ("directional-derivative-mismatch", "adjoint-derivative-mismatch",
+                 "dependency-undeclared", "dependency-never-observed",
+                 "dependencies-kind-violated", "initial-dependency-undeclared",
+                 "initial-dependencies-kind-violated",
+                 "initial-directional-derivative-mismatch", "start-value-not-applied"):
+        assert CATALOGUE[name].code in ODE_PROBES, name
+
+
+def test_unparseable_manifest_leaves_ode_mode_to_probe():
     fmu = variant("HelloWorldDAE", manifest_edits=[("<ModelStructure>", "<ModelStructure")])
     report = check_fmu(fmu, options=EngineOptions(probes=True))
     skips = _probe_skips(report)
-    assert set(skips) == PROBE_CODES
+    assert set(skips) == MANIFEST_PROBES
     assert all("manifest" in r for r in skips.values())
     assert "nothing to check or probe" in dict(report.info)["manifest"]
+    assert ODE_PROBES - {CATALOGUE[n].code for n in runner.RUNNER_RULES} <= set(
+        report.rules_run) | set(skips) | {c for c, _ in report.rules_not_run}
+    modes = dict(dict(report.info)["modes"])
+    assert modes["ODE mode"] == "probed" and modes["DAE mode"].startswith("not probed")
+    assert _probe_findings(report) == []
 
 
-def test_fmu_without_manifest_is_not_probed(tmp_path):
+def test_fmu_without_manifest_is_probed_in_ode_mode(tmp_path):
     fmu = _rewrite(build_scene("HelloWorldDAE"), tmp_path / "plain.fmu",
                    drop=lambda n: n == MANIFEST)
     report = check_fmu(fmu, options=EngineOptions(probes=True))
+    assert set(_probe_skips(report)) - ODE_PROBES == MANIFEST_PROBES
+    assert {"DAE742", "DAE750", "DAE713"} <= set(report.rules_run)
+    assert report.binary_not_checked is None
+    assert _probe_findings(report) == []
+
+
+def test_fmu_without_manifest_and_no_probes_says_the_binary_was_not_checked(tmp_path):
+    fmu = _rewrite(build_scene("HelloWorldDAE"), tmp_path / "plain.fmu",
+                   drop=lambda n: n == MANIFEST)
+    report = check_fmu(fmu, options=EngineOptions(probes=False))
+    assert "--no-probes" in (report.binary_not_checked or "")
     assert set(_probe_skips(report)) == PROBE_CODES
 
 
@@ -131,7 +161,10 @@ def test_dae_only_fmu_is_probed_in_dae_mode_after_the_static_error():
                   manifest_edits=[('<EnableDAEParameter valueReference="1"/>', "")])
     report = check_fmu(fmu, options=EngineOptions(probes=True))
     assert "DAE201" in {f.code for f in report.findings}  # enable-parameter-missing (static)
-    assert _probe_findings(report) == []
+    # the variable 'dae' still declares start="false", and the binary holds true: the start
+    # check names it, and no probe of DAE mode finds anything
+    assert [(f.name, f.subject) for f in _probe_findings(report)] == [
+        ("start-value-not-applied", "dae")]
     ran = set(report.rules_run)
     for name in ("algebraic-not-settable", "initial-residual-nonzero", "nan-or-inf",
                  "evaluation-not-repeatable", "enable-handshake"):

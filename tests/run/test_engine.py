@@ -39,7 +39,13 @@ def test_missing_manifest_skips_dae_rules_not_fails(tmp_path):
     report = check_fmu(_scene(tmp_path, remove=["manifest"]), options=EngineOptions(probes=False))
     assert {f.code for f in report.findings} == {"DAE091"}
     assert report.rules_skipped, "DAE rules should be listed as skipped"
-    assert all(reason == NOT_A_DAE_FMU for _, reason in report.rules_skipped)
+    # the layer's rules do not apply; the ODE-mode probes would, but the probes are off
+    assert {reason for _, reason in report.rules_skipped} == {
+        NOT_A_DAE_FMU, "probes turned off (--no-probes)"}
+    catalogue = default_catalogue()
+    for code, reason in report.rules_skipped:
+        layer = bool({"manifest", "dae-layer"} & set(catalogue[code].needs))
+        assert (reason == NOT_A_DAE_FMU) == layer, code
 
 
 def test_grouping_many_identical_violations(tmp_path, monkeypatch):

@@ -196,6 +196,13 @@ SCENES.update({
         f=fg[0], g=fg[1], h=lambda x, w, u: np.zeros(0),
         x_test=_FB_X_TEST, u_test=[], x_alt=_FB_X_ALT, u_alt=[])
        for name, fg in (("FourBar", _FB_SI), ("FourBarScaled", _FB_SCALED))},
+    "MassSpringDAE": Scene(
+        "MassSpringDAE", vr_x=[2, 4], vr_der=[3, 5], vr_w=[6], vr_res=[7], vr_u=[], vr_y=[8],
+        vr_enable=1, tunable=False, x0=[1.0, 0.0], w0=[0.0], x_nominal=[1.0, 1.0],
+        f=lambda x, w, u: np.array([x[1], w[0] / 2.0]),
+        g=lambda x, w, u: np.array([w[0] + 8.0 * x[0]]),
+        h=lambda x, w, u: np.array([x[1] ** 2 + 4.0 * x[0] ** 2]),
+        x_test=[0.6, -1.2], u_test=[], x_alt=[-0.3, 0.8], u_alt=[]),
     # the equations with the discrete variables at their start (k = 1, b = 0); the events
     # themselves are tested in test_event_scene.py
     "EventDAE": Scene(

@@ -1,0 +1,104 @@
+"""start-value-not-applied (DAE713, issue 21.3): after instantiation, before any set, every
+variable with initial exact or approx holds its XML start, whatever its type, size or place.
+
+The family: every type fmi3Get* reads (Float64, Float32, the integer types, Enumeration,
+Boolean, String), scalars and arrays (an element of a parameter array, a constant array), in a
+DAE FMU (a state, an algebraic variable: tests/fixtures/defects/basic.py) and in FMUs without
+the layer (the corpus, PythonFMU3's in tests/probes/test_pythonfmu3.py). The XML is edited
+after the binary was built, so the binary holds the old value. The clean scenes and corpus
+stay clean (tests/probes/test_clean_scenes.py, tests/scenes/test_corpus.py).
+"""
+from __future__ import annotations
+
+import pytest
+from lxml import etree
+
+from conformance.model.description import read_model_description
+from conformance.probes.instantiation import expected_starts
+from conformance.probes.start_values import differs
+from conformance.report.findings import Severity
+from conformance.run.engine import EngineOptions, check_fmu
+from tests.fixtures import variant
+
+EDITS = {   # TypesAndArrays: (old, new) -> the variable named
+    "scale": ('name="scale" valueReference="6" causality="input" start="1.5"',
+              'name="scale" valueReference="6" causality="input" start="2.5"'),      # Float32
+    "x": ('name="x" valueReference="1" declaredType="Length" initial="exact" start="1"',
+          'name="x" valueReference="1" declaredType="Length" initial="exact" start="2"'),
+    "i8": ('start="-8"', 'start="-9"'),
+    "u64": ('start="64"', 'start="65"'),
+    "enabled": ('start="true"', 'start="false"'),
+    "label": ('"hello, corpus"', '"hello"'),
+    "mode": ('variability="fixed" start="2"/>', 'variability="fixed" start="1"/>'),
+    "gains": ('start="1 2 3"', 'start="1 2 4"'),                                   # element 2
+    "offsets": ('start="10 20"', 'start="10 21"'),                          # a constant array
+}
+
+
+@pytest.mark.parametrize("variable", sorted(EDITS))
+def test_each_type_and_shape_is_read_and_compared(variable):
+    fmu = variant("TypesAndArrays", md_edits=(EDITS[variable],))
+    report = check_fmu(fmu, options=EngineOptions(probes=True))
+    bad = [(f.name, f.subject) for f in report.findings if f.severity >= Severity.WARNING]
+    assert bad == [("start-value-not-applied", variable)]
+    (finding,) = [f for f in report.findings if f.name == "start-value-not-applied"]
+    ev = finding.evidence_dict()
+    assert ev["state"].startswith("Instantiated") and ev["start"] != ev["held"]
+
+
+def test_several_edits_give_one_finding_per_variable():
+    fmu = variant("TypesAndArrays", md_edits=tuple(EDITS.values()))
+    report = check_fmu(fmu, options=EngineOptions(probes=True))
+    found = sorted(f.subject for f in report.findings if f.name == "start-value-not-applied")
+    assert found == sorted(EDITS)
+
+
+MD = """<fmiModelDescription fmiVersion="3.0" modelName="M" instantiationToken="t">
+<ModelExchange modelIdentifier="M"/>
+<ModelVariables>
+  <Float64 name="time" valueReference="0" causality="independent"/>
+  <UInt64 name="n" valueReference="1" causality="structuralParameter" variability="fixed" start="3"/>
+  <Float64 name="a" valueReference="2" causality="parameter" variability="fixed" start="0.5"><Dimension valueReference="1"/></Float64>
+  <Float64 name="b" valueReference="3" causality="parameter" variability="fixed" start="1 2"><Dimension start="2"/></Float64>
+  <Float64 name="c" valueReference="4" causality="parameter" variability="fixed" start="1 2"><Dimension start="3"/></Float64>
+  <Float64 name="d" valueReference="5" causality="output"/>
+  <Float64 name="e" valueReference="6" initial="approx" start="NaN"/>
+  <Boolean name="f" valueReference="7" causality="parameter" variability="fixed" start="1"/>
+  <Int32 name="g" valueReference="8" causality="parameter" variability="fixed" start="x"/>
+  <String name="h" valueReference="9" causality="parameter" variability="fixed"><Start value="a b"/></String>
+</ModelVariables>
+<ModelStructure><Output valueReference="5"/></ModelStructure>
+</fmiModelDescription>"""
+
+
+def test_what_the_xml_says_each_variable_must_hold():
+    model = read_model_description(etree.ElementTree(etree.fromstring(MD.encode())))
+    got = {v.name: expected_starts(model, v) for v in model.variables}
+    assert got == {
+        "time": None,                 # independent: no start
+        "n": [3],
+        "a": [0.5, 0.5, 0.5],         # one value broadcast to the size the parameter gives
+        "b": [1.0, 2.0],
+        "c": None,                    # two values for three elements: the static rules' case
+        "d": None,                    # calculated: nothing to hold
+        "e": None,                    # NaN: float-attribute-not-finite, not the binary's fault
+        "f": [True],
+        "g": None,                    # not a number: the schema stage reports it
+        "h": ["a b"],                 # one <Start> child, spaces and all
+    }
+
+
+@pytest.mark.parametrize("type_, held, start, expected", [
+    ("Float64", 0.1, 0.1, False),
+    ("Float64", 0.1 + 1e-17, 0.1, False),
+    ("Float64", 0.5, 0.6, True),
+    ("Float64", float("nan"), 0.6, True),
+    ("Float32", 0.10000000149011612, 0.1, False),   # single precision of the XML's 0.1
+    ("Float32", 0.2, 0.1, True),
+    ("Int8", -8, -8, False),
+    ("UInt64", 2**63, 2**63 + 1, True),
+    ("Boolean", 1, True, False),
+    ("String", "ball", "balloon", True),
+])
+def test_how_a_value_is_compared(type_, held, start, expected):
+    assert differs(type_, held, start, rtol=1e-12, float32_rtol=2e-7) is expected

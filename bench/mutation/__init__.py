@@ -12,7 +12,8 @@ independent evidence (``promises.py``). ``python -m bench.mutation`` runs it; ``
 writes ``reports/mutation/``; ``docs/mutation.md`` explains it.
 
 Floors, bottom up: ``fmu_view`` (the scene's XML and an fmpy session), ``oracle`` and
-``promises`` (fmpy only, each also a subprocess entry point), ``targets`` and ``generate``
+``promises`` with its helpers ``promise_jacobian`` and ``promise_calls`` (fmpy only; the oracle
+and the promises are also subprocess entry points), ``targets`` and ``generate``
 (what is mutated), ``checking`` (lsdae runs and the kill criterion), ``verdicts``, ``campaign``,
 ``sweep``, ``report``, ``cli``. Nothing in ``conformance/`` imports this package.
 """

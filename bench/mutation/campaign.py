@@ -85,7 +85,7 @@ class Runner:
     _checker: str = field(default_factory=checker_digest)
     _oracle: str = field(default_factory=lambda: _module_digest("oracle", "fmu_view"))
     _promises: str = field(default_factory=lambda: _module_digest(
-        "promises", "promise_jacobian", "fmu_view"))
+        "promises", "promise_calls", "promise_jacobian", "fmu_view"))
 
     def observe(self, fmu: Path) -> dict[str, Any]:
         return self.cache.get(f"oracle-{_sha(fmu)}-{self._oracle}", lambda: oracle.observe(fmu))

@@ -231,11 +231,56 @@ class Session:
             return f"error: {exc}"
         return rows
 
+    def status(self, label: str, fn: Callable[..., Any], *args: Any) -> str:
+        """"ok" or the failure of a call whose result does not matter (an illegal call)."""
+        try:
+            self.call(label, fn, *args)
+            return "ok"
+        except Failure as exc:
+            return f"refused: {exc}"
+
     def free(self) -> None:
         try:
             self.model.freeInstance()
         except Exception:  # a mutant may fail here too; the observation is already taken
             pass
+
+
+def illegal_calls(fresh: Callable[[], Session], mode: str) -> dict[str, str]:
+    """Calls FMI 3.0 does not allow, each on a fresh instance in Continuous-Time Mode (after an
+    fmi3Error only Terminated is left), and their outcome: an unknown value reference, setting
+    a derivative or an output, setting w in ODE mode (DAE-43), an event indicator or an output
+    as the known of a directional derivative (PD-04, PD-05), a seed shorter than the knowns
+    (PD-01)."""
+    probe = fresh()
+    lay = probe.layout
+    probe.free()
+    first = [*lay.derivatives, *lay.outputs][:1]
+    vrs, floats = ctypes.c_uint32 * 4, ctypes.c_double * 4
+    n = min(2, len(lay.states))
+    calls: dict[str, Callable[[Session], Any]] = {
+        "get unknown vr": lambda s: s.model.getFloat64([max(lay.variables) + 100]),
+        "set a derivative": lambda s: s.model.setFloat64(list(lay.derivatives[:1]),
+                                                         [0.5] * len(lay.derivatives[:1]))}
+    if lay.outputs:
+        calls["set an output"] = lambda s: s.model.setFloat64([lay.outputs[0]], [0.5])
+    if mode == "ode" and lay.algebraic:
+        calls["set w in ODE mode"] = lambda s: s.model.setFloat64([lay.algebraic[0]], [0.5])
+    for label, known in (("indicator as known", lay.indicators[:1]),
+                         ("output as known", lay.outputs[:1])):
+        if known and first:
+            calls[label] = lambda s, k=known: s.model.getDirectionalDerivative(first, list(k),
+                                                                               [1.0])
+    if first and n:
+        calls["seed shorter than the knowns"] = lambda s: s.model.fmi3GetDirectionalDerivative(
+            s.model.component, vrs(*first), 1, vrs(*lay.states[:n]), n, floats(1.0), n - 1,
+            floats(), 1)
+    out = {}
+    for label, call in calls.items():
+        s = fresh()
+        out[label] = s.status(label, call, s)
+        s.free()
+    return out
 
 
 def fixed_points(layout: SceneLayout, count: int = 2) -> list[dict[str, Any]]:

@@ -11,7 +11,10 @@ and the full directional and adjoint Jacobians of derivatives, outputs (and resi
 respect to states, inputs (and w), then each vector and each variable read first after the
 point is set again, coming from another point (so that no value cached at the old point or by
 another read stands in for it); one event
-iteration, its output arguments preset to true (an FMU must write them all); a switch to DAE
+iteration at the last point and one at t = 0.9 (after the time event of EventDAE), their output
+arguments preset to true (an FMU must write them all); the outcome of illegal calls, each on a
+fresh instance (``fmu_view.illegal_calls``, and the switch's setter given the value reference
+of time); a stop time and tolerance defined for ODE mode's initialisation; a switch to DAE
 mode in Reconfiguration Mode when the switch is tunable; the values after ``fmi3Reset``, and
 after a second initialisation of the reset instance.
 
@@ -32,7 +35,7 @@ import zipfile
 from pathlib import Path
 from typing import Any, Callable
 
-from .fmu_view import Failure, SceneLayout, Session, fixed_points, read_layout
+from .fmu_view import Failure, SceneLayout, Session, fixed_points, illegal_calls, read_layout
 
 RTOL = 1e-12
 ATOL = 1e-14
@@ -97,6 +100,26 @@ def _fresh(s: Session, lay: SceneLayout, p: dict[str, Any], mode: str,
     return out
 
 
+def _running(unzipped: Path, lay: SceneLayout, mode: str) -> Session:
+    s = Session(unzipped, lay, f"oracle-{mode}-illegal")
+    if mode == "dae":
+        s.configure_dae()
+    s.call("init", s.model.enterInitializationMode, startTime=0.0)
+    s.call("init", s.model.exitInitializationMode)
+    s.call("CT", s.model.enterContinuousTimeMode)
+    return s
+
+
+def _wrong_switch(unzipped: Path, lay: SceneLayout) -> str:
+    """The switch's setter given the value reference of time, in Configuration Mode."""
+    s = Session(unzipped, lay, "oracle-switch")
+    try:
+        s.call("fmi3EnterConfigurationMode", s.model.enterConfigurationMode)
+        return s.status("fmi3SetBoolean", s.model.setBoolean, [min(lay.variables)], [True])
+    finally:
+        s.free()
+
+
 def _counts(s: Session) -> dict[str, Any]:
     return {"states": s.call("fmi3GetNumberOfContinuousStates",
                              s.model.getNumberOfContinuousStates),
@@ -115,7 +138,10 @@ def _run_mode(unzipped: Path, lay: SceneLayout, mode: str) -> dict[str, Any]:
         if mode == "dae" and not _step(obs, "configure", lambda: s.configure_dae() or "ok"):
             return obs
         obs["instantiated"] = _snapshot(s, lay, vectors=False)
-        if not _step(obs, "enter-init", lambda: m.enterInitializationMode(startTime=0.0) or "ok"):
+        # ODE mode with a stop time and tolerance defined, DAE mode without
+        init = (lambda: m.enterInitializationMode(tolerance=1e-6, startTime=0.0, stopTime=1.0)) \
+            if mode == "ode" else (lambda: m.enterInitializationMode(startTime=0.0))
+        if not _step(obs, "enter-init", lambda: init() or "ok"):
             return obs
         init_unknowns = [*lay.derivatives, *lay.outputs,
                          *(lay.algebraic if mode == "dae" else ())]
@@ -129,6 +155,9 @@ def _run_mode(unzipped: Path, lay: SceneLayout, mode: str) -> dict[str, Any]:
         if not _step(obs, "enter-ct", lambda: m.enterContinuousTimeMode() or "ok"):
             return obs
         obs["start"] = {**_snapshot(s, lay), **_jacobians(s, lay, mode)}
+        _step(obs, "illegal", lambda: illegal_calls(lambda: _running(unzipped, lay, mode), mode))
+        if mode == "dae":
+            _step(obs, "wrong-switch", lambda: _wrong_switch(unzipped, lay))
         for k, p in enumerate(fixed_points(lay), start=1):
             by_value = k == 2   # states set with fmi3SetFloat64 at p2
             if not _step(obs, f"set-p{k}", lambda: s.set_point(
@@ -142,6 +171,11 @@ def _run_mode(unzipped: Path, lay: SceneLayout, mode: str) -> dict[str, Any]:
                                             *s.update_discrete_states(preset=True)]):
             return obs
         obs["after-event"] = _snapshot(s, lay)
+        if not _step(obs, "late-event", lambda: [   # after the scenes' time event at 0.75
+                m.enterContinuousTimeMode(), m.setTime(0.9), m.enterEventMode(),
+                *s.update_discrete_states(preset=True), *s.update_discrete_states(preset=True)]):
+            return obs
+        obs["after-late-event"] = _snapshot(s, lay)
         if mode == "ode" and lay.enable_tunable:
             if _step(obs, "reconfigure", lambda: s.configure_dae() or "ok"):
                 obs["reconfigured"] = _snapshot(s, lay)

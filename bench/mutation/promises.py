@@ -24,6 +24,12 @@ with the digest ids (``/work/shared/spec/fmi-ls-dae-digest.md``):
   true only when a state changed, an announced ``nextEventTime`` is not in the past, and every
   output argument is written (two instances whose outputs hold true / false before the call
   agree); the nominals do not depend on what the caller's buffer held.
+- FMI 3.0.2 3.2.1: each variable read on its own, first after the point is set (coming from
+  another point), reads what it reads with all the others: no read returns a value computed
+  for an earlier point.
+- Illegal calls are refused (an unknown value reference, setting a derivative, an output, or w
+  in ODE mode, an event indicator or output as a known, a short seed, the switch's setter on
+  another variable): SG-MATRIX, DAE-43, PD-01, PD-04, PD-05.
 - Repeatability and independence: a point evaluated again after another gives the same
   values; a second instance alive beside the first, and a third after it, give the first's
   values at the same point.
@@ -44,37 +50,12 @@ import zipfile
 from pathlib import Path
 from typing import Any, Callable
 
-from .fmu_view import Failure, SceneLayout, Session, fixed_points, read_layout
+from .fmu_view import Failure, SceneLayout, Session, fixed_points, illegal_calls, read_layout
+from .promise_calls import (CONSISTENT_REL, compare, events, noise_of, read_alone,
+                            running)
 from .promise_jacobian import Violation, derivative_violations, kind_violations
 
 REPO_ROOT = Path(__file__).resolve().parents[2]
-EQ_REL = 1e-10       # the same value (ODE mode's Newton result moves in its last digits)
-ATOL = 1e-12         # for values near zero (residuals at a solution)
-CONSISTENT_REL = 1e-8
-
-
-def _same(a: Any, b: Any, rel: float = EQ_REL) -> bool:
-    if isinstance(a, float) and isinstance(b, float):
-        return a == b or abs(a - b) <= rel * max(abs(a), abs(b)) + ATOL
-    return a == b
-
-
-def _compare(key: str, names: list[str], got: list[Any], want: list[Any],
-             rel: float = EQ_REL) -> list[Violation]:
-    return [(f"{key} {n}", f"{g!r} instead of {w!r}")
-            for n, g, w in zip(names, got, want) if not _same(g, w, rel)]
-
-
-def _running(unzipped: Path, lay: SceneLayout, mode: str, name: str) -> Session:
-    s = Session(unzipped, lay, name)
-    if mode == "dae":
-        s.configure_dae()
-    s.call("enter init", s.model.enterInitializationMode, startTime=0.0)
-    s.call("exit init", s.model.exitInitializationMode)
-    s.call("enter CT", s.model.enterContinuousTimeMode)
-    return s
-
-
 def _start_and_reset(unzipped: Path, lay: SceneLayout, mode: str) -> list[Violation]:
     vrs = lay.all_vrs()
     names = [lay.variables[vr].name for vr in vrs]
@@ -86,9 +67,9 @@ def _start_and_reset(unzipped: Path, lay: SceneLayout, mode: str) -> list[Violat
     out = _refused(first, names, f"Instantiated, {mode}")
     with_start = [(n, g, lay.variables[vr].start) for n, g, vr in zip(names, first, vrs)
                   if lay.variables[vr].start is not None]
-    out += _compare(f"MV-23 start value in Instantiated ({mode})", [n for n, _, _ in with_start],
-                    [g for _, g, _ in with_start], [w for _, _, w in with_start])
-    s = _running(unzipped, lay, mode, "reset")
+    out += compare(f"MV-23 start value in Instantiated ({mode})", [n for n, _, _ in with_start],
+                   [g for _, g, _ in with_start], [w for _, _, w in with_start])
+    s = running(unzipped, lay, mode, "reset")
     p = fixed_points(lay)[0]
     s.set_point(p["t"], p["x"], p["u"], p["w"] if mode == "dae" else None)
     s.read(vrs)
@@ -99,7 +80,7 @@ def _start_and_reset(unzipped: Path, lay: SceneLayout, mode: str) -> list[Violat
         fresh = Session(unzipped, lay, "fresh-ode")
         reference = fresh.read(vrs)
         fresh.free()
-    out += _compare(f"MV-23 value after fmi3Reset ({mode})", names, s.read(vrs), reference)
+    out += compare(f"MV-23 value after fmi3Reset ({mode})", names, s.read(vrs), reference)
     if s.enable() is not False:
         out.append((f"DAE-11 switch off after fmi3Reset ({mode})", f"reads {s.enable()}"))
     s.free()
@@ -109,39 +90,6 @@ def _start_and_reset(unzipped: Path, lay: SceneLayout, mode: str) -> list[Violat
 def _refused(values: list[Any], names: list[str], where: str) -> list[Violation]:
     return [(f"FMI 3.0.2 2.2.6 fmi3GetFloat64 reads every variable ({where}) {n}", str(v)[:120])
             for n, v in zip(names, values) if isinstance(v, str)]
-
-
-def _events(unzipped: Path, lay: SceneLayout, mode: str) -> list[Violation]:
-    """Event iterations at later and later times, on two instances whose output arguments hold
-    true / false before each call: the FMU writes every output (the two agree),
-    valuesOfContinuousStatesChanged is true only when a state changed, and an announced
-    nextEventTime is not in the past (FMI 3.0.2 2.3.5, fmi3UpdateDiscreteStates)."""
-    out: list[Violation] = []
-    pair = [_running(unzipped, lay, mode, f"events-{mode}-{k}") for k in (1, 2)]
-    for p in sorted(fixed_points(lay, 4), key=lambda p: p["t"]):
-        for s in pair:
-            s.set_point(p["t"], p["x"], p["u"], p["w"] if mode == "dae" else None)
-            s.call("fmi3EnterEventMode", s.model.enterEventMode)
-        for _ in range(10):
-            before = pair[0].vector("states", len(lay.states))
-            first, second = (s.update_discrete_states(preset=k == 0) for k, s in enumerate(pair))
-            if first != second:
-                out.append((f"2.3.5 fmi3UpdateDiscreteStates writes every output ({mode})",
-                            f"outputs preset true: {first}, preset false: {second}"))
-            need, _term, _nominals, changed, defined, when = second
-            if changed and pair[0].vector("states", len(lay.states)) == before:
-                out.append((f"2.3.5 valuesOfContinuousStatesChanged only when a state changed "
-                            f"({mode})", f"true at t = {p['t']}, states unchanged {before}"))
-            if defined and not when >= p["t"]:
-                out.append((f"2.3.5 nextEventTime not in the past ({mode})",
-                            f"{when} announced at t = {p['t']}"))
-            if not need:
-                break
-        for s in pair:
-            s.call("fmi3EnterContinuousTimeMode", s.model.enterContinuousTimeMode)
-    for s in pair:
-        s.free()
-    return out
 
 
 def _getters(s: Session, lay: SceneLayout, where: str) -> list[Violation]:
@@ -155,8 +103,8 @@ def _getters(s: Session, lay: SceneLayout, where: str) -> list[Violation]:
             got = s.vector(vector, len(vrs))
             names = [lay.variables[vr].name for vr in vrs]
             want = s.read(vrs)
-            out += _compare(f"{key} = fmi3GetFloat64 ({where})", names,
-                            got if isinstance(got, list) else [got] * len(vrs), want)
+            out += compare(f"{key} = fmi3GetFloat64 ({where})", names,
+                           got if isinstance(got, list) else [got] * len(vrs), want)
     nominals = s.vector("nominals", n)
     if nominals != s.vector("nominals", n, fill=1e300):
         out.append((f"FMI 3.0.2 3.2.1 nominals whatever the buffer held ({where})",
@@ -166,8 +114,8 @@ def _getters(s: Session, lay: SceneLayout, where: str) -> list[Violation]:
         if bad:
             out.append((f"FMI 3.0.2 3.2.1 nominals finite and > 0 ({where})", f"{nominals}"))
         xml = [lay.variables[vr].nominal or 1.0 for vr in lay.states]
-        out += _compare(f"derived: nominals = XML nominal ({where})",
-                        [lay.variables[vr].name for vr in lay.states], nominals, xml)
+        out += compare(f"derived: nominals = XML nominal ({where})",
+                       [lay.variables[vr].name for vr in lay.states], nominals, xml)
     counts = {"states": s.call("count", s.model.getNumberOfContinuousStates),
               "indicators": s.call("count", s.model.getNumberOfEventIndicators)}
     for what, want in (("states", n), ("indicators", len(lay.indicators))):
@@ -179,7 +127,7 @@ def _getters(s: Session, lay: SceneLayout, where: str) -> list[Violation]:
 
 def _mode(unzipped: Path, lay: SceneLayout, mode: str) -> list[Violation]:
     out: list[Violation] = []
-    s = _running(unzipped, lay, mode, f"promises-{mode}")
+    s = running(unzipped, lay, mode, f"promises-{mode}")
     vrs = lay.all_vrs()
     names = [lay.variables[vr].name for vr in vrs]
     if mode == "dae":
@@ -196,28 +144,31 @@ def _mode(unzipped: Path, lay: SceneLayout, mode: str) -> list[Violation]:
         out += _refused(values[k], names, f"Continuous-Time Mode, {mode}")
         out += _getters(s, lay, f"{mode} p{k}")
         if mode == "dae" and lay.algebraic:
-            out += _compare("DAE-40 w set in Continuous-Time Mode reads back (dae)",
-                            [lay.variables[vr].name for vr in lay.algebraic],
-                            s.read(lay.algebraic), p["w"])
+            out += compare("DAE-40 w set in Continuous-Time Mode reads back (dae)",
+                           [lay.variables[vr].name for vr in lay.algebraic],
+                           s.read(lay.algebraic), p["w"])
         found, jac = derivative_violations(s, lay, mode, f"p{k}")
         out += found
         jacobians.append(jac)
     out += kind_violations(lay, mode, jacobians)
     p = fixed_points(lay)[0]
+    out += read_alone(s, lay, p, mode, values[1])
     s.set_point(p["t"], p["x"], p["u"], p["w"] if mode == "dae" else None)
-    out += _compare(f"repeatable: p1 again after p2 ({mode})", names, s.read(vrs), values[1])
-    other = _running(unzipped, lay, mode, "second")
+    noise = noise_of(lay, mode)
+    out += compare(f"repeatable: p1 again after p2 ({mode})", names, s.read(vrs), values[1],
+                   noise=noise)
+    other = running(unzipped, lay, mode, "second")
     other.set_point(p["t"], p["x"], p["u"], p["w"] if mode == "dae" else None)
-    out += _compare(f"independent: a second instance at p1 ({mode})", names,
-                    other.read(vrs), values[1])
+    out += compare(f"independent: a second instance at p1 ({mode})", names,
+                   other.read(vrs), values[1], noise=noise)
     other.free()
-    out += _compare(f"independent: the first instance after the second ({mode})", names,
-                    s.read(vrs), values[1])
+    out += compare(f"independent: the first instance after the second ({mode})", names,
+                   s.read(vrs), values[1], noise=noise)
     s.free()
-    third = _running(unzipped, lay, mode, "third")
+    third = running(unzipped, lay, mode, "third")
     third.set_point(p["t"], p["x"], p["u"], p["w"] if mode == "dae" else None)
-    out += _compare(f"independent: a later instance at p1 ({mode})", names, third.read(vrs),
-                    values[1])
+    out += compare(f"independent: a later instance at p1 ({mode})", names, third.read(vrs),
+                   values[1], noise=noise)
     third.free()
     return out
 
@@ -225,7 +176,7 @@ def _mode(unzipped: Path, lay: SceneLayout, mode: str) -> list[Violation]:
 def _ode_dae(unzipped: Path, lay: SceneLayout) -> list[Violation]:
     """DAE-42 at each fixed point: DAE mode at ODE mode's solved w."""
     out: list[Violation] = []
-    ode, dae = _running(unzipped, lay, "ode", "ode"), _running(unzipped, lay, "dae", "dae")
+    ode, dae = running(unzipped, lay, "ode", "ode"), running(unzipped, lay, "dae", "dae")
     unknowns = [*lay.derivatives, *lay.outputs]
     names = [lay.variables[vr].name for vr in unknowns]
     for k, p in enumerate(fixed_points(lay), start=1):
@@ -235,11 +186,25 @@ def _ode_dae(unzipped: Path, lay: SceneLayout) -> list[Violation]:
         res = dae.read(lay.residuals)
         if any(not isinstance(r, float) or not abs(r) <= 1e-8 for r in res):
             out.append((f"DAE-42 residuals vanish at ODE mode's w (p{k})", f"{res}"))
-        out += _compare(f"DAE-42 DAE mode = ODE mode (p{k})", names, dae.read(unknowns),
-                        ode.read(unknowns), CONSISTENT_REL)
+        out += compare(f"DAE-42 DAE mode = ODE mode (p{k})", names, dae.read(unknowns),
+                       ode.read(unknowns), CONSISTENT_REL)
     ode.free()
     dae.free()
     return out
+
+
+def _illegal(unzipped: Path, lay: SceneLayout, mode: str) -> list[Violation]:
+    """Calls FMI 3.0 does not allow are refused with fmi3Error (SG-MATRIX, DAE-43, PD-01,
+    PD-04, PD-05 of the digest; the switch's setter checks its value reference)."""
+    outcome = illegal_calls(lambda: running(unzipped, lay, mode, "illegal"), mode)
+    if mode == "dae":
+        s = Session(unzipped, lay, "switch")
+        s.call("fmi3EnterConfigurationMode", s.model.enterConfigurationMode)
+        outcome["fmi3SetBoolean of a Float64 variable"] = s.status(
+            "fmi3SetBoolean", s.model.setBoolean, [min(lay.variables)], [True])
+        s.free()
+    return [(f"an illegal call is refused ({mode}): {what}", "accepted with fmi3OK")
+            for what, result in outcome.items() if result == "ok"]
 
 
 def broken_unzipped(unzipped: Path) -> dict[str, str]:
@@ -250,7 +215,8 @@ def broken_unzipped(unzipped: Path) -> dict[str, str]:
         *((f"start and reset ({m})", lambda m=m: _start_and_reset(unzipped, lay, m))
           for m in ("ode", "dae")),
         *((f"mode {m}", lambda m=m: _mode(unzipped, lay, m)) for m in ("ode", "dae")),
-        *((f"events {m}", lambda m=m: _events(unzipped, lay, m)) for m in ("ode", "dae")),
+        *((f"events {m}", lambda m=m: events(unzipped, lay, m)) for m in ("ode", "dae")),
+        *((f"illegal calls {m}", lambda m=m: _illegal(unzipped, lay, m)) for m in ("ode", "dae")),
         ("ODE/DAE", lambda: _ode_dae(unzipped, lay))]
     for label, step in steps:
         try:

@@ -50,6 +50,9 @@ def _step(obs: dict[str, Any], label: str, fn: Callable[[], Any]) -> bool:
     except Failure as exc:
         obs[label] = f"failed: {exc}"
         return False
+    except Exception as exc:  # fmpy's FMICallException from a direct call of the model
+        obs[label] = f"failed: {type(exc).__name__}: {exc}"
+        return False
 
 
 def _snapshot(s: Session, lay: SceneLayout, vectors: bool = True) -> dict[str, Any]:

@@ -43,7 +43,10 @@ def running(unzipped: Path, lay: SceneLayout, mode: str, name: str) -> Session:
     s = Session(unzipped, lay, name)
     if mode == "dae":
         s.configure_dae()
-    s.call("enter init", s.model.enterInitializationMode, startTime=0.0)
+        s.call("enter init", s.model.enterInitializationMode, startTime=0.0)
+    else:   # as simulators call it: a tolerance and a stop time defined
+        s.call("enter init (tolerance 1e-6, stop time 1)", s.model.enterInitializationMode,
+               tolerance=1e-6, startTime=0.0, stopTime=1.0)
     s.call("exit init", s.model.exitInitializationMode)
     s.call("enter CT", s.model.enterContinuousTimeMode)
     return s
@@ -70,11 +73,25 @@ def moved(p: dict[str, Any]) -> dict[str, Any]:
     return {"t": p["t"], **{k: [v * 1.01 + 1e-3 for v in p[k]] for k in ("x", "u", "w")}}
 
 
+def _after_event(s: Session, lay: SceneLayout, mode: str, t: float) -> list[Violation]:
+    """The values read right after an event iteration are those of the new discrete state:
+    setting the same point again (t, x, u, w unchanged) and reading must give them again."""
+    vrs = lay.all_vrs()
+    names = [lay.variables[vr].name for vr in vrs]
+    first = s.read(vrs)
+    x = [float(v) for v in s.vector("states", len(lay.states))]
+    s.set_point(t, x, [float(v) for v in s.read(lay.inputs)],
+                [float(v) for v in s.read(lay.algebraic)] if mode == "dae" else None)
+    return compare(f"3.1 values read after an event iteration are up to date ({mode})", names,
+                   first, s.read(vrs), noise=noise_of(lay, mode))
+
+
 def events(unzipped: Path, lay: SceneLayout, mode: str) -> list[Violation]:
     """Event iterations at later and later times, on two instances whose output arguments hold
     true / false before each call: the FMU writes every output (the two agree),
-    valuesOfContinuousStatesChanged is true only when a state changed, and an announced
-    nextEventTime is not in the past (FMI 3.0.2 2.3.5, fmi3UpdateDiscreteStates)."""
+    valuesOfContinuousStatesChanged is true only when a state changed, an announced
+    nextEventTime is not in the past (FMI 3.0.2 2.3.5, fmi3UpdateDiscreteStates), and the
+    values read after the iteration are up to date."""
     out: list[Violation] = []
     pair = [running(unzipped, lay, mode, f"events-{mode}-{k}") for k in (1, 2)]
     for p in sorted(fixed_points(lay, 4), key=lambda p: p["t"]):
@@ -98,6 +115,7 @@ def events(unzipped: Path, lay: SceneLayout, mode: str) -> list[Violation]:
                 break
         for s in pair:
             s.call("fmi3EnterContinuousTimeMode", s.model.enterContinuousTimeMode)
+        out += _after_event(pair[0], lay, mode, p["t"])
     for s in pair:
         s.free()
     return out

@@ -5,6 +5,8 @@ A survivor is a *consistent model change* when the mutant keeps every promise th
 keeps, a *missed defect* when it breaks one that lsdae did not report. The promises measured,
 with the digest ids (``/work/shared/spec/fmi-ls-dae-digest.md``):
 
+- Every instance is initialised as simulators do it: ODE mode with a tolerance and a stop
+  time defined, DAE mode without (a failure there is the broken promise "runs through").
 - MV-23: after instantiation (both modes) every variable with a ``start`` reads it back;
   after ``fmi3Reset`` every variable reads what a fresh instance reads, and the switch is off
   (DAE-11).
@@ -21,8 +23,8 @@ with the digest ids (``/work/shared/spec/fmi-ls-dae-digest.md``):
   structural zeros, kinds.
 - FMI 3.0.2 2.2.6: every Float64 variable reads back with ``fmi3GetFloat64`` (Instantiated,
   Continuous-Time Mode); 2.3.5: in event iterations, ``valuesOfContinuousStatesChanged`` is
-  true only when a state changed, an announced ``nextEventTime`` is not in the past, and every
-  output argument is written (two instances whose outputs hold true / false before the call
+  true only when a state changed, an announced ``nextEventTime`` is not in the past, the values
+  read after an event iteration are up to date, every output argument is written (two instances whose outputs hold true / false before the call
   agree); the nominals do not depend on what the caller's buffer held.
 - FMI 3.0.2 3.2.1: each variable read on its own, first after the point is set (coming from
   another point), reads what it reads with all the others: no read returns a value computed

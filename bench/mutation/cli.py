@@ -3,6 +3,7 @@
     python -m bench.mutation --out reports/mutation            # the whole campaign
     python -m bench.mutation --targets SimpleDAE/model.c --per-target 5 --sweep none
     python -m bench.mutation --list                             # targets and their mutant counts
+    python -m bench.mutation --rescore reports/mutation/campaign.json   # verdicts edited: report again
 
 Exit status 1 when a survivor is UNEXPLAINED (no verdict in verdicts.toml) or CONTRADICTED (a
 consistent model change that breaks a promise); ``--stubs FILE`` then writes suggested entries
@@ -11,6 +12,7 @@ for them, to be reviewed and moved into verdicts.toml.
 from __future__ import annotations
 
 import argparse
+import json
 import logging
 import os
 import platform
@@ -27,8 +29,8 @@ from .checking import MAIN, SETTINGS
 from .generate import generate, sample, universalmutator_version
 from .report import classify, rule_kills, tally, unexplained, write
 from .sweep import run_sweep
-from .targets import all_targets
-from .verdicts import DEFAULT_FILE, VerdictError, load, stub
+from .targets import all_targets, describe
+from .verdicts import DEFAULT_FILE, Verdict, VerdictError, load, stub
 
 SWEEP_DEFAULT = "off,quick,long,budget-low,budget-high,seeds-3"
 
@@ -55,6 +57,9 @@ def _args(argv: Sequence[str] | None) -> argparse.Namespace:
     p.add_argument("--stubs", type=Path, help="write suggested verdicts for the unexplained "
                    "and contradicted survivors to this file")
     p.add_argument("--list", action="store_true", help="list the targets and stop")
+    p.add_argument("--rescore", type=Path, metavar="CAMPAIGN_JSON",
+                   help="no checks: read a campaign.json, apply the current verdicts, and "
+                   "write the report again (to --out)")
     p.add_argument("-v", "--verbose", action="store_true", help="log every mutant")
     return p.parse_args(argv)
 
@@ -74,6 +79,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     except VerdictError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
+    if args.rescore:
+        data = json.loads(args.rescore.read_text())
+        generated = {row["target"]: row["generated"] for row in data["targets"][:-1]}
+        data.setdefault("covered", describe([t for t in all_targets() if t.name in generated]))
+        return finish(data, data["mutants"], generated, verdicts, args)
     targets = [t for t in all_targets() if not args.targets or t.name in args.targets]
     if args.targets and len(targets) != len(set(args.targets)):
         print(f"error: unknown target in {args.targets}", file=sys.stderr)
@@ -99,7 +109,6 @@ def main(argv: Sequence[str] | None = None) -> int:
     runner = Runner(Cache(fresh=args.fresh))
     records = run_all(runner, chosen, jobs=args.jobs)
     t_main = time.perf_counter()
-    classify(records, verdicts)
     sweep = run_sweep(runner, records, sweep_settings, count=args.sweep_count, seed=args.seed,
                       jobs=args.jobs) if sweep_settings else None
     finished = time.perf_counter()
@@ -127,8 +136,15 @@ def main(argv: Sequence[str] | None = None) -> int:
         ("lsdae checks", f"{checked} mutants at the main setting, {sweep_checks} in the sweep")]
     for rec in records:
         rec.pop("fmu", None)
-    data = {"meta": meta, "targets": tally(records, generated), "rules": rule_kills(records),
-            "mutants": records, "sweep": sweep}
+    data = {"meta": meta, "covered": describe(targets), "sweep": sweep}
+    return finish(data, records, generated, verdicts, args)
+
+
+def finish(data: dict[str, Any], records: list[dict[str, Any]], generated: dict[str, int],
+           verdicts: dict[str, Verdict], args: argparse.Namespace) -> int:
+    """Explain the survivors, compute the tables, write the report, print the verdict."""
+    classify(records, verdicts)
+    data.update(targets=tally(records, generated), rules=rule_kills(records), mutants=records)
     write(data, args.out)
     total = data["targets"][-1]
     score = "n/a" if total["score"] is None else f"{100 * total['score']:.1f} %"

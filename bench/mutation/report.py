@@ -88,6 +88,15 @@ def markdown(data: dict[str, Any]) -> str:
            "computed by the campaign from `campaign.json`. How to read it: `docs/mutation.md`.",
            "", "| | |", "|---|---|"]
     out += [f"| {k} | {v} |" for k, v in meta["table"]]
+    if data.get("covered"):
+        out += ["", "## What was mutated", "",
+                "Each scene file whole (its live lines); the framework "
+                "(`scenes/common/fmi3_framework.c`) in groups of functions, with their lines; why "
+                "these and not others: `docs/mutation.md`.", "",
+                "| target | host | functions (lines) |", "|---|---|---|"]
+        out += [f"| `{c['target']}` | {c['host']} | "
+                + (", ".join(f"`{f}` {a}-{b}" for f, a, b in c["functions"]) or "the whole file")
+                + " |" for c in data["covered"]]
     out += ["", "## Per target", "",
             "| target | host | generated | sampled | stillborn | equivalent | killed | survived "
             "(consistent / missed / undetectable / unexplained) | timeout / failed / internal "

@@ -84,6 +84,7 @@ def plot(sweep: dict[str, Any], path: Path) -> None:
         ax.annotate(row["setting"], (row["median_seconds"], 100 * row["fraction"]),
                     textcoords="offset points", xytext=(6, 4), fontsize=9)
     ax.set_xscale("log")
+    ax.set_ylim(0, 100)
     ax.set_xlabel("median lsdae check time per mutant [s] (log scale)")
     ax.set_ylabel("mutants killed [%]")
     ax.set_title(f"Detection against time ({sweep['count']} mutants, the same at every setting)",

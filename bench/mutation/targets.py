@@ -113,6 +113,18 @@ def code_lines(text: str) -> set[int]:
     return {n for n, line in enumerate(without.splitlines(), start=1) if line.strip()}
 
 
+def describe(targets: list[Target]) -> list[dict[str, object]]:
+    """What each target covers, for the report: file, host, and for the framework groups
+    each function with its first and last line."""
+    out: list[dict[str, object]] = []
+    for t in targets:
+        text = t.text()
+        out.append({"target": t.name, "source": t.source, "host": t.host,
+                    "functions": [[f, function_lines(text, f)[0], function_lines(text, f)[-1]]
+                                  for f in t.functions]})
+    return out
+
+
 def candidate_lines(target: Target) -> list[int]:
     """The target's lines with code, before the liveness test (directives never)."""
     text = target.text()

@@ -21,7 +21,8 @@ The file is keyed by mutant id::
 
 A survivor without an entry is UNEXPLAINED; one recorded as a consistent model change while
 the promise checks find a promise it newly breaks is CONTRADICTED. Both make the campaign exit
-non-zero. :func:`stub` writes an entry from the evidence for a human to review.
+non-zero. :func:`stub` writes an entry from the evidence for a human to review; its reason
+starts with REVIEW, which :func:`load` refuses, so a stub never passes for a verdict.
 """
 from __future__ import annotations
 
@@ -68,6 +69,9 @@ def load(path: Path = DEFAULT_FILE) -> dict[str, Verdict]:
         if cls not in CLASSES or not entry.get("reason"):
             raise VerdictError(f"{path}: verdict {key!r} needs class (one of "
                                f"{', '.join(CLASSES)}) and reason")
+        if entry["reason"].startswith("REVIEW"):
+            raise VerdictError(f"{path}: verdict {key!r} is a stub nobody reviewed (its reason "
+                               "starts with REVIEW)")
         if cls == "missed-defect" and not entry.get("promise"):
             raise VerdictError(f"{path}: missed-defect {key!r} needs the promise it breaks")
         out[key] = Verdict(cls, entry["reason"], entry.get("promise", ""),

@@ -12,6 +12,7 @@ from pathlib import Path
 import pytest
 
 from bench.mutation.campaign import Cache, Runner, run_mutant
+from bench.mutation.cli import main
 from bench.mutation.checking import CheckResult, outcome, read_findings
 from bench.mutation.generate import Mutant, _parse, generate, sample
 from bench.mutation.oracle import differences
@@ -204,3 +205,29 @@ def test_the_oracle_sees_what_only_an_order_of_calls_or_a_setter_shows(runner, o
     assert m.apply(text) == text.replace(old, new)
     rec = run_mutant(runner, m)
     assert rec["outcome"] != "equivalent" and rec["oracle_detail"]
+
+
+def test_rescore_applies_the_verdicts_file_to_a_written_campaign(tmp_path, capsys):
+    survivor = {"id": "HelloWorldDAE/model.c:49:0000000000", "target": SOURCE,
+                "source": SOURCE, "host": "HelloWorldDAE", "line": 49, "original": "a",
+                "mutated": "b", "outcome": "survived", "promises": {}, "oracle_detail": ["x"]}
+    killed = {**survivor, "id": "HelloWorldDAE/model.c:50:1111111111", "outcome": "killed",
+              "killed_by": [["DAE740", "d(g1)/d(x)", "directional-derivative-mismatch"]]}
+    campaign = tmp_path / "campaign.json"
+    campaign.write_text(__import__("json").dumps({
+        "meta": {"table": [], "main": "quick"}, "sweep": None,
+        "targets": [{"target": SOURCE, "generated": 399}, {"target": "total"}],
+        "mutants": [survivor, killed]}))
+    verdicts = tmp_path / "verdicts.toml"
+    verdicts.write_text("")
+    out = tmp_path / "report"
+    assert main(["--rescore", str(campaign), "--verdicts", str(verdicts), "--out", str(out),
+                 "--stubs", str(tmp_path / "stubs.toml")]) == 1
+    assert "UNEXPLAINED" in capsys.readouterr().out
+    with pytest.raises(VerdictError, match="REVIEW"):   # a stub never passes for a verdict
+        load(tmp_path / "stubs.toml")
+    verdicts.write_text(f'[verdict."{survivor["id"]}"]\nclass = "missed-defect"\n'
+                        'promise = "MV-23"\nreason = "r"\n')
+    assert main(["--rescore", str(campaign), "--verdicts", str(verdicts), "--out", str(out)]) == 0
+    data = __import__("json").loads((out / "campaign.json").read_text())
+    assert data["targets"][-1]["score"] == 0.5 and (out / "summary.md").is_file()

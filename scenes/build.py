@@ -19,6 +19,11 @@ unless ``cache_dir`` or the environment variable ``LSDAE_SCENE_CACHE`` says
 otherwise.  Builds write into a private temporary directory inside the cache and
 publish with an atomic rename, so concurrent builds (two pytest processes) are safe.
 
+``overrides`` replace the text of C sources for one build (the mutation campaign,
+``bench/mutation/``): ``build_scene("SimpleDAE", overrides={"SimpleDAE/model.c": text})``
+compiles a staged copy of the sources with that file replaced; the cache key holds the
+replaced text, so each distinct source set is built once.
+
 Command line::
 
     python -m scenes.build SimpleDAE Robertson --out DIR [-D DEFECT_X ...]
@@ -39,7 +44,7 @@ import tempfile
 import xml.etree.ElementTree as ET
 import zipfile
 from pathlib import Path
-from typing import Sequence
+from typing import Mapping, Sequence
 
 SCENES_DIR = Path(__file__).resolve().parent
 REPO_ROOT = SCENES_DIR.parent
@@ -177,7 +182,20 @@ def _xml_info(md_path: Path) -> tuple[str, str]:
     return identifiers.pop(), token
 
 
-def _cache_key(name: str, defines: list[str], cc: str) -> str:
+def _check_overrides(name: str, overrides: Mapping[str, str]) -> dict[str, bytes]:
+    """The overrides as bytes by path relative to scenes/; each must name a C source of the
+    build (a file of the scene's folder or of the framework's)."""
+    known = {p.relative_to(SCENES_DIR).as_posix() for p in _source_files(name)
+             if p.suffix in _NOT_PACKED}
+    for rel in overrides:
+        if rel not in known:
+            raise SceneBuildError(f"override {rel!r} is not a C source of scene {name} "
+                                  f"(known: {', '.join(sorted(known))})")
+    return {rel: text.encode() for rel, text in overrides.items()}
+
+
+def _cache_key(name: str, defines: list[str], cc: str,
+               overrides: Mapping[str, bytes] | None = None) -> str:
     h = hashlib.sha256()
 
     def feed(label: str, data: bytes) -> None:
@@ -186,8 +204,10 @@ def _cache_key(name: str, defines: list[str], cc: str) -> str:
 
     feed("scene", name.encode())
     feed("build.py", Path(__file__).read_bytes())
+    overrides = overrides or {}
     for path in _source_files(name):
-        feed(str(path.relative_to(SCENES_DIR)), path.read_bytes())
+        rel = path.relative_to(SCENES_DIR).as_posix()
+        feed(rel, overrides[rel] if rel in overrides else path.read_bytes())
     for header in sorted(fmi_headers_dir().glob("fmi3*.h")):
         feed(header.name, header.read_bytes())
     feed("defines", "\n".join(defines).encode())
@@ -197,9 +217,30 @@ def _cache_key(name: str, defines: list[str], cc: str) -> str:
     return h.hexdigest()
 
 
-def _compile(name: str, defines: list[str], cc: str, token: str, library: Path) -> str:
+def _stage(name: str, overrides: Mapping[str, bytes], dest: Path) -> tuple[Path, Path]:
+    """Copies of the scene's and the framework's C sources in ``dest`` with ``overrides``
+    applied; returns the staged (common, scene) folders."""
     scene = scene_xml_dir(name)
     common = CORPUS_COMMON_DIR if is_corpus(name) else COMMON_DIR
+    staged = []
+    for folder in (common, scene):
+        target = dest / folder.relative_to(SCENES_DIR)
+        target.mkdir(parents=True, exist_ok=True)
+        for path in folder.iterdir():
+            if path.is_file() and path.suffix in _NOT_PACKED:
+                rel = path.relative_to(SCENES_DIR).as_posix()
+                data = overrides[rel] if rel in overrides else path.read_bytes()
+                (target / path.name).write_bytes(data)
+        staged.append(target)
+    return staged[0], staged[1]
+
+
+def _compile(name: str, defines: list[str], cc: str, token: str, library: Path,
+             overrides: Mapping[str, bytes] | None = None) -> str:
+    scene = scene_xml_dir(name)
+    common = CORPUS_COMMON_DIR if is_corpus(name) else COMMON_DIR
+    if overrides:
+        common, scene = _stage(name, overrides, library.parent / "src")
     framework = "corpus_fmu.c" if is_corpus(name) else "fmi3_framework.c"
     sources = [common / framework] + sorted(scene.glob("*.c"))
     cmd = [cc, *CFLAGS, f"-I{common}", f"-I{scene}", f"-I{fmi_headers_dir()}",
@@ -218,11 +259,15 @@ def _zip_entry(zf: zipfile.ZipFile, arcname: str, data: bytes) -> None:
     zf.writestr(info, data)
 
 
-def build_scene(name: str, *, defines: Sequence[str] = (), cache_dir: Path | None = None) -> Path:
+def build_scene(name: str, *, defines: Sequence[str] = (), cache_dir: Path | None = None,
+                overrides: Mapping[str, str] | None = None) -> Path:
     """Build (or fetch from the cache) the FMU of scene ``name``; returns its path.
 
     ``defines`` are preprocessor macros (``"DEFECT_X"``, ``"N=3"`` or ``"-DDEFECT_X"``)
-    used to build deliberately defective variants.  The returned file is named
+    used to build deliberately defective variants.  ``overrides`` maps a C source's path
+    relative to scenes/ (``"SimpleDAE/model.c"``, ``"common/fmi3_framework.c"``) to the text
+    compiled instead of the file's (a mutant); the cache is keyed on that text.  The returned
+    file is named
     ``<name>.fmu`` and lives in a cache folder specific to all inputs; next to it,
     ``build.log`` holds the compiler's diagnostics (empty for a clean build).
     """
@@ -231,7 +276,8 @@ def build_scene(name: str, *, defines: Sequence[str] = (), cache_dir: Path | Non
         cache_dir = Path(os.environ.get(CACHE_ENV_VAR) or DEFAULT_CACHE_DIR)
     cache_dir = Path(cache_dir)
     cc = compiler()
-    key = _cache_key(name, defines, cc)
+    replaced = _check_overrides(name, overrides or {})
+    key = _cache_key(name, defines, cc, replaced)
     out_dir = cache_dir / f"{name}-{key[:20]}"
     fmu = out_dir / f"{name}.fmu"
     if fmu.is_file():
@@ -243,7 +289,7 @@ def build_scene(name: str, *, defines: Sequence[str] = (), cache_dir: Path | Non
     with tempfile.TemporaryDirectory(dir=out_dir, prefix=".build-") as tmp:
         tmp_path = Path(tmp)
         library = tmp_path / (model_identifier + shared_library_extension())
-        log = _compile(name, defines, cc, token, library)
+        log = _compile(name, defines, cc, token, library, replaced)
         tmp_fmu = tmp_path / fmu.name
         with zipfile.ZipFile(tmp_fmu, "w") as zf:
             _zip_entry(zf, "modelDescription.xml", (scene / "modelDescription.xml").read_bytes())

@@ -24,8 +24,8 @@ from fmpy.fmi3 import FMU3Model
 from lxml import etree
 from scipy.optimize import fsolve
 
-from scenes.build import (MANIFEST_ENTRY, REPO_ROOT, build_scene, platform_tuple, scene_names,
-                          scene_xml_dir, shared_library_extension)
+from scenes.build import (MANIFEST_ENTRY, REPO_ROOT, SceneBuildError, build_scene, platform_tuple,
+                          scene_names, scene_xml_dir, shared_library_extension)
 
 FMPY_DIR = Path(fmpy.__file__).resolve().parent
 FMI_ERROR = 3
@@ -876,3 +876,48 @@ def test_invalid_knowns_and_unknowns(make, name):
                    one, 1, out, 1) == 0
     assert dae.raw("fmi3GetDirectionalDerivative", u32(sc.vr_w[0]), 1, u32(sc.vr_x[0]), 1,
                    one, 1, out, 1) == FMI_ERROR   # w is no unknown after initialisation
+
+
+def _ode_derivative(fmu: Path, unzip: Path) -> float:
+    """der(x) of HelloWorldDAE after initialisation in ODE mode."""
+    md = fmpy.read_model_description(str(fmu))
+    model = FMU3Model(guid=md.guid, unzipDirectory=str(fmpy.extract(str(fmu), str(unzip))),
+                      modelIdentifier=md.modelExchange.modelIdentifier, instanceName="ovr")
+    model.instantiate()
+    model.enterInitializationMode()
+    model.exitInitializationMode()
+    value = model.getFloat64([3])[0]
+    model.terminate()
+    model.freeInstance()
+    return value
+
+
+def test_overrides_build_the_replaced_source_and_key_the_cache_on_it(tmp_path):
+    source = (scene_xml_dir("HelloWorldDAE") / "model.c").read_text()
+    assert source.count("der[0] = w[0];") == 1
+    doubled = source.replace("der[0] = w[0];", "der[0] = 2 * w[0];")
+    plain = build_scene("HelloWorldDAE", cache_dir=tmp_path)
+    mutant = build_scene("HelloWorldDAE", cache_dir=tmp_path,
+                         overrides={"HelloWorldDAE/model.c": doubled})
+    assert mutant != plain
+    assert build_scene("HelloWorldDAE", cache_dir=tmp_path,
+                       overrides={"HelloWorldDAE/model.c": doubled}) == mutant
+    # the same text as the file is the same build as no override at all
+    assert build_scene("HelloWorldDAE", cache_dir=tmp_path,
+                       overrides={"HelloWorldDAE/model.c": source}) == plain
+    assert (scene_xml_dir("HelloWorldDAE") / "model.c").read_text() == source
+    assert _ode_derivative(plain, tmp_path / "p") == pytest.approx(1.4, rel=1e-12)
+    assert _ode_derivative(mutant, tmp_path / "m") == pytest.approx(2.8, rel=1e-12)
+
+
+def test_overrides_of_the_framework_and_their_errors(tmp_path):
+    framework = (REPO_ROOT / "scenes" / "common" / "fmi3_framework.c").read_text()
+    with pytest.raises(SceneBuildError, match="compiling"):
+        build_scene("HelloWorldDAE", cache_dir=tmp_path,
+                    overrides={"common/fmi3_framework.c": framework + "\nint broken = ;\n"})
+    with pytest.raises(SceneBuildError, match="not a C source"):
+        build_scene("HelloWorldDAE", cache_dir=tmp_path, overrides={"SimpleDAE/model.c": ""})
+    with pytest.raises(SceneBuildError, match="not a C source"):
+        build_scene("HelloWorldDAE", cache_dir=tmp_path,
+                    overrides={"HelloWorldDAE/modelDescription.xml": ""})
+    assert not [p for p in tmp_path.rglob("*.fmu")]

@@ -11,6 +11,7 @@ during which an earlier one died (``ProbeJob.died``). The run it serves
 """
 from __future__ import annotations
 
+import logging
 import os
 import pickle
 import subprocess
@@ -34,6 +35,8 @@ RUNNER_RULES = (CRASHED, TIMED_OUT, MEMORY, NOT_LOADABLE)
 MEMORY_FRACTION = 0.8        # a death at this share of the address-space limit is "memory"
 STDERR_TAIL = 1500
 PACKAGE_ROOT = str(Path(__file__).resolve().parents[2])
+
+log = logging.getLogger(__name__)
 
 
 @dataclass
@@ -133,10 +136,12 @@ class Driver:
                         current = str(event.get("code", ""))
                         step_deadline = time.monotonic() + self.limits.probe_seconds
                     elif kind == "done":
+                        self._stats(str(event.get("code", "")), event.get("stats"))
                         self._done(event)
                         current = ""
                         step_deadline = time.monotonic() + self.limits.probe_seconds
                     elif kind == "ready":
+                        self._stats("setup", event.get("stats"))
                         watch.baseline = event.get("memory") or {}
                         for key, value in (event.get("info") or {}).items():
                             self.run.outcome.info.setdefault(key, value)
@@ -166,6 +171,19 @@ class Driver:
                     return _Death("died", self._died(current, watch))
         finally:
             watch.kill()
+
+    def _stats(self, step: str, stats: Any) -> None:
+        """What one step of the worker cost (seconds, FMI calls, peak resident bytes): kept
+        in the outcome and logged (``lsdae check -v``), never in the report."""
+        if not isinstance(stats, dict):
+            return
+        entry = {"probe": step, **{k: stats.get(k) for k in ("seconds", "calls", "peak_rss")}}
+        self.run.outcome.stats.append(entry)
+        peak = entry["peak_rss"]
+        log.debug("%s: %.3f s, %s FMI calls, peak resident %s", self.run.names(step),
+                  float(entry["seconds"] or 0.0), entry["calls"],
+                  f"{peak / (1 << 20):.0f} MiB" if isinstance(peak, int) else "unknown",
+                  extra={"probe_stats": entry})
 
     def _done(self, event: dict[str, Any]) -> None:
         code = str(event.get("code"))

@@ -167,15 +167,16 @@ def _reported_dependencies(ctx: ProbeContext, layout: JacobianLayout) -> Iterato
     reader = getattr(ctx.dae, "variable_dependencies", None)
     if not (me and me.flag("providesPerElementDependencies") and callable(reader)):
         return
-    declared = {i: {layout.cols[j].vr for j in layout.pattern.row(i)}
-                for i, r in enumerate(layout.rows) if r.explicit}
     knowns = {c.vr: c for c in layout.cols}
-    for i, listed in declared.items():
+    for i, r in enumerate(layout.rows):
+        if not r.explicit:
+            continue
         try:
-            reported = {int(vr) for vr, *_ in reader(layout.rows[i].vr)}
+            reported = {int(vr) for vr, *_ in reader(r.vr)}
         except FmiError:
             return
-        for vr in sorted((reported & set(knowns)) - listed):
+        listed = {layout.cols[j].vr for j in layout.pattern.row(i).tolist()}
+        for vr in sorted({vr for vr in reported if vr in knowns} - listed):
             entry = f"d({layout.rows[i].name})/d({knowns[vr].name})"
             yield Violation(
                 "fmi3GetVariableDependencies reports {subject} but the manifest dependencies "

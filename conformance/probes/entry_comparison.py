@@ -55,21 +55,31 @@ def closest_entries(s: Survey, which: str, *, rtol: float, margin: float, ulps: 
     tolerance for passing checks too): (entry, |FMU - FD|, tolerance), worst first."""
     layout = s.layout
     assert layout is not None
-    best: dict[tuple[int, int], tuple[float, float, float]] = {}
+    n = len(layout.cols)
+    parts: list[tuple[np.ndarray, ...]] = []
     for ps in s.points:
         e = ps.entries
         if (e.dd if which == "dd" else e.adj) is None:
             continue
-        fmu, diff, tol, _, _ = compared_entries(layout, e, which, rtol=rtol, margin=margin,
-                                                ulps=ulps)
+        _, diff, tol, _, _ = compared_entries(layout, e, which, rtol=rtol, margin=margin,
+                                              ulps=ulps)
         ok = np.isfinite(diff) & (tol > 0)
-        for k in np.flatnonzero(ok):
-            key = (int(e.rows[k]), int(e.cols[k]))
-            ratio = float(diff[k] / tol[k])
-            if key not in best or ratio > best[key][0]:
-                best[key] = (ratio, float(diff[k]), float(tol[k]))
-    ranked = sorted(best.items(), key=lambda kv: -kv[1][0])[:limit]
-    return [(layout.entry(i, j), d, t) for (i, j), (_, d, t) in ranked]
+        parts.append((e.rows[ok].astype(np.int64) * n + e.cols[ok], diff[ok] / tol[ok],
+                      diff[ok], tol[ok]))
+    if not parts:
+        return []
+    key, ratio, diff, tol = (np.concatenate(column) for column in zip(*parts))
+    if not key.size:
+        return []
+    order = np.arange(key.size)   # points in turn, entries in order: first seen first
+    # each entry at its worst point (the first of equal ratios), ranked worst first, entries
+    # of equal ratio in the order they were first seen
+    by_key = np.lexsort((order, -ratio, key))
+    first = by_key[np.r_[True, key[by_key][1:] != key[by_key][:-1]]]
+    _, seen = np.unique(key, return_index=True)   # sorted by key, as ``first`` is
+    ranked = first[np.lexsort((seen, -ratio[first]))][:limit]
+    return [(layout.entry(int(key[k] // n), int(key[k] % n)), float(diff[k]), float(tol[k]))
+            for k in ranked]
 
 
 def mismatched_entries(s: Survey, which: str, *, rtol: float, margin: float, ulps: float) -> dict:
@@ -140,25 +150,44 @@ def kind_changes(s: Survey, kinds: Mapping[tuple[int, int], str], *, rtol: float
     times the largest row scale over ``nominal_j``: the unknown is not affine in the known."""
     layout = s.layout
     assert layout is not None
-    samples: dict[tuple[int, int], list] = {}
-    for ps in s.points:
+    n = len(layout.cols)
+    wanted = np.array(sorted(i * n + j for i, j in kinds), dtype=np.int64)
+    parts: list[tuple[np.ndarray, ...]] = []
+    for p, ps in enumerate(s.points):
         e = ps.entries
-        scale = row_scale(layout, e)
-        err = e.error(ulps)
-        for k, (i, j) in enumerate(zip(e.rows.tolist(), e.cols.tolist())):
-            if (i, j) in kinds and e.declared[k] and np.isfinite(e.fd[k]):
-                samples.setdefault((i, j), []).append(
-                    (float(e.fd[k]), float(err[k]), float(scale[i] / layout.nominal[j]), ps))
+        key = e.rows.astype(np.int64) * n + e.cols
+        use = np.isin(key, wanted) & e.declared & np.isfinite(e.fd)
+        scale = row_scale(layout, e)[e.rows[use]] / layout.nominal[e.cols[use]]
+        parts.append((key[use], e.fd[use], e.error(ulps)[use], scale,
+                      np.full(int(use.sum()), p)))
     out: dict[tuple[int, int], KindChange] = {}
-    for (i, j), values in sorted(samples.items()):
-        hi = max(values, key=lambda v: v[0])
-        lo = min(values, key=lambda v: v[0])
-        scale = max(v[2] for v in values)
-        tol = margin * (hi[1] + lo[1]) + rtol * scale
-        if hi[0] - lo[0] > tol:
-            out[(i, j)] = KindChange(kinds[(i, j)], lo[:2] + (lo[3],), hi[:2] + (hi[3],), tol,
-                                     scale)
+    if not parts:
+        return out
+    key, fd, err, scale, point = (np.concatenate(column) for column in zip(*parts))
+    if not key.size:
+        return out
+    order = np.arange(key.size)     # the points in turn: the first of equal values wins
+    hi = _first_per_key(key, -fd, order)
+    lo = _first_per_key(key, fd, order)
+    keys = key[hi]
+    largest = np.maximum.reduceat(scale[np.argsort(key, kind="stable")],
+                                  np.r_[0, np.flatnonzero(np.diff(np.sort(key))) + 1])
+    tol = margin * (err[hi] + err[lo]) + rtol * largest
+    for a in np.flatnonzero(fd[hi] - fd[lo] > tol):
+        i, j = divmod(int(keys[a]), n)
+        h, lw = hi[a], lo[a]
+        out[(i, j)] = KindChange(
+            kinds[(i, j)], (float(fd[lw]), float(err[lw]), s.points[point[lw]]),
+            (float(fd[h]), float(err[h]), s.points[point[h]]), float(tol[a]),
+            float(largest[a]))
     return out
+
+
+def _first_per_key(key: np.ndarray, value: np.ndarray, order: np.ndarray) -> np.ndarray:
+    """For each distinct ``key`` (ascending), the index of its smallest ``value``, the first
+    in ``order`` among equal ones."""
+    by = np.lexsort((order, value, key))
+    return by[np.r_[True, key[by][1:] != key[by][:-1]]]
 
 
 def entry_violations(s: Survey, worst: dict, message: str) -> Iterator[Violation]:

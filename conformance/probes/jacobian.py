@@ -76,12 +76,14 @@ class _At:
             known.update(zip(missing, ev.evaluate(point, missing).tolist()))
         self.x = np.array([point.t if c.role == "time" else float(known[c.vr])
                            for c in layout.cols])
+        self.value_cols = np.array([c.role != "time" for c in layout.cols], dtype=bool)
+        self.value_vrs = [c.vr for c in layout.cols if c.role != "time"]
         self.base = self.at(np.zeros(len(layout.cols)))
 
     def at(self, delta: np.ndarray) -> Point:
         x = self.x + delta
         t = float(x[self.time[0]]) if self.time else self.point.t
-        values = {c.vr: float(v) for c, v in zip(self.layout.cols, x) if c.role != "time"}
+        values = dict(zip(self.value_vrs, x[self.value_cols].tolist()))
         return Point(t, values, self.point.label)
 
     def fun(self, delta: np.ndarray) -> np.ndarray:

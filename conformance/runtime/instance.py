@@ -6,7 +6,7 @@ the unknowns asked for, using the :class:`~conformance.runtime.layout.Layout` of
 from __future__ import annotations
 
 import ctypes
-from typing import Any, Sequence
+from typing import Any, Mapping, Sequence
 
 import numpy as np
 
@@ -24,11 +24,35 @@ MAX_DEPENDENCIES = 10_000_000   # a larger count from the FMU is garbage, not an
 
 
 def _vrs(values: Sequence[int]) -> Any:
-    return (ctypes.c_uint * len(values))(*values)
+    """A C array of value references (through numpy: a large list converts in one pass)."""
+    try:
+        array = np.asarray(values, dtype=np.uint32)
+    except OverflowError:  # out of range (hostile XML): ctypes wraps it, as it always did
+        return (ctypes.c_uint * len(values))(*values)
+    return (ctypes.c_uint * len(array)).from_buffer_copy(array) if len(array) else \
+        (ctypes.c_uint * 0)()
 
 
 def _doubles(values: Sequence[float] | np.ndarray) -> Any:
-    return (ctypes.c_double * len(values))(*[float(v) for v in values])
+    """A C array of doubles (through numpy, as :func:`_vrs`)."""
+    array = np.asarray(values, dtype=np.float64)
+    return (ctypes.c_double * len(array)).from_buffer_copy(array) if len(array) else \
+        (ctypes.c_double * 0)()
+
+
+def _all_in(vrs: Sequence[int], values: Mapping[int, float]) -> bool:
+    return values.keys() >= set(vrs)
+
+
+def _present(vrs: Sequence[int], values: Mapping[int, float]) -> list[int]:
+    """``vrs`` that ``values`` holds, in order (all of them, usually: one set operation)."""
+    keys = values.keys()
+    return list(vrs) if keys >= set(vrs) else [vr for vr in vrs if vr in keys]
+
+
+def _pick(values: Mapping[int, float], vrs: Sequence[int]) -> list[float]:
+    """``values[vr]`` for each of ``vrs`` (a C-level loop: thousands per call)."""
+    return list(map(values.__getitem__, vrs))
 
 
 class Instance:
@@ -208,24 +232,23 @@ class Instance:
         algebraic variables of ``point``; a refused set is a :class:`KnownNotSet` saying what
         was being set (algebraic variables and inputs share one fmi3SetFloat64)."""
         self._known("time", (), lambda: self.set_time(point.t))
+        values = point.values
         states = self.layout.states_for(self.mode)
-        if states and all(vr in point.values for vr in states):
-            self._known("states", states,
-                        lambda: self.set_states([point.values[vr] for vr in states]))
+        if states and _all_in(states, values):
+            self._known("states", states, lambda: self.set_states(_pick(values, states)))
         dae = self.mode == "dae" and algebraic
-        alg = [vr for vr in (self.layout.algebraic if dae else ()) if vr in point.values]
-        inputs = [vr for vr in self.layout.inputs if vr in point.values]
+        alg = _present(self.layout.algebraic if dae else (), values)
+        inputs = _present(self.layout.inputs, values)
         knowns = [*alg, *inputs]
         kind = ("algebraic variables and inputs" if alg and inputs
                 else "algebraic variables" if alg else "inputs")
-        self._known(kind, knowns,
-                    lambda: self.set_float64(knowns, [point.values[vr] for vr in knowns]))
+        self._known(kind, knowns, lambda: self.set_float64(knowns, _pick(values, knowns)))
 
     def set_algebraic(self, point: Point) -> None:
         """Set the algebraic variables of ``point`` alone (a :class:`KnownNotSet` if refused)."""
-        alg = [vr for vr in self.layout.algebraic if vr in point.values]
+        alg = _present(self.layout.algebraic, point.values)
         self._known("algebraic variables", alg,
-                    lambda: self.set_float64(alg, [point.values[vr] for vr in alg]))
+                    lambda: self.set_float64(alg, _pick(point.values, alg)))
 
     def _known(self, kind: str, vrs: Sequence[int], action: Any) -> None:
         try:

@@ -40,14 +40,28 @@ def _doubles(values: Sequence[float] | np.ndarray) -> Any:
         (ctypes.c_double * 0)()
 
 
+_SETS: dict[int, tuple[tuple[int, ...], frozenset[int]]] = {}
+
+
+def _as_set(vrs: Sequence[int]) -> frozenset[int]:
+    """``vrs`` as a set; the layout's tuples (which live as long as the worker) are made sets
+    once, by identity, since they are passed again at every evaluation."""
+    if not isinstance(vrs, tuple):
+        return frozenset(vrs)
+    held = _SETS.get(id(vrs))
+    if held is None or held[0] is not vrs:
+        held = _SETS[id(vrs)] = (vrs, frozenset(vrs))
+    return held[1]
+
+
 def _all_in(vrs: Sequence[int], values: Mapping[int, float]) -> bool:
-    return values.keys() >= set(vrs)
+    return values.keys() >= _as_set(vrs)
 
 
 def _present(vrs: Sequence[int], values: Mapping[int, float]) -> list[int]:
     """``vrs`` that ``values`` holds, in order (all of them, usually: one set operation)."""
     keys = values.keys()
-    return list(vrs) if keys >= set(vrs) else [vr for vr in vrs if vr in keys]
+    return list(vrs) if keys >= _as_set(vrs) else [vr for vr in vrs if vr in keys]
 
 
 def _pick(values: Mapping[int, float], vrs: Sequence[int]) -> list[float]:

@@ -8,6 +8,11 @@ finding naming the probe and the FMI call in progress, read from the shared
 endurance probes, also says after how many FMI calls). Each new worker is told the probes
 during which an earlier one died (``ProbeJob.died``). The run it serves
 (``conformance.probes.runner``) holds the outcome and the limits; its docstring gives the policy.
+
+A time or memory limit reached while *no* FMI call was in progress is lsdae's own: the binary
+was not running, so it is never a ``binary-*`` finding. The probe is listed as not run, with
+the limit and the reason ("lsdae's own computation ..."), and the worker that was stopped for
+it is replaced by a new one for the remaining probes, which says so too.
 """
 from __future__ import annotations
 
@@ -43,6 +48,7 @@ log = logging.getLogger(__name__)
 class _Death:
     kind: str  # "end", "died", "timeout", "fmu-timeout", "load-failed", "fatal", "worker-error"
     probe: str = ""
+    own: str = ""   # lsdae's own limit was reached (no FMI call in progress): the reason
 
 
 class Driver:
@@ -58,9 +64,11 @@ class Driver:
         self.died: list[str] = []      # probes during which a worker died or was killed
 
     def drive(self) -> None:
-        restarts = 0
+        restarts, own = 0, 0
         while True:
             result = self._one_worker()
+            if result.own:
+                self._not_run_own(result)
             done = {c for c, _ in self.run.outcome.skipped} | self.run.outcome.run
             self.remaining = [r for r in self.remaining if r.code not in done]
             if result.kind == "end":
@@ -73,19 +81,22 @@ class Driver:
             if result.kind == "fatal" and not self.remaining:
                 return
             if result.kind == "fmu-timeout":
-                self.run.skip(self.remaining, f"the per-FMU time limit of "
+                self.run.skip(self.remaining, result.own or f"the per-FMU time limit of "
                               f"{self.limits.fmu_seconds:g} s was reached", failed=True)
                 return
             if result.probe in ("setup", ""):
-                self.run.skip(self.remaining, "the worker failed before the probes could run "
-                              "(see the findings)", failed=True)
+                self.run.skip(self.remaining, result.own or "the worker failed before the "
+                              "probes could run (see the findings)", failed=True)
                 return
             if not self.remaining:
                 return
             restarts += 1
+            own += bool(result.own)
             if restarts > self.limits.max_restarts:
                 self.run.skip(self.remaining, f"the worker was restarted "
-                              f"{self.limits.max_restarts} times", failed=True)
+                              f"{self.limits.max_restarts} times" + (
+                                  f", {own} of them after lsdae's own limits" if own else ""),
+                              failed=True)
                 return
 
     # -- one worker process --------------------------------------------------------------
@@ -127,8 +138,8 @@ class Driver:
                 if now >= self.fmu_deadline or now >= step_deadline:
                     per_fmu = now >= self.fmu_deadline
                     watch.kill()
-                    probe = self._timed_out(current, per_fmu)
-                    return _Death("fmu-timeout" if per_fmu else "timeout", probe)
+                    probe, own = self._timed_out(current, per_fmu)
+                    return _Death("fmu-timeout" if per_fmu else "timeout", probe, own)
                 events, eof = watch.read(min(step_deadline, self.fmu_deadline) - now)
                 for event in events:
                     kind = event.get("event")
@@ -168,7 +179,7 @@ class Driver:
                         return _Death("end")
                 if eof:  # the channel closed before "end": whatever the exit status, a death
                     watch.finish()
-                    return _Death("died", self._died(current, watch))
+                    return _Death("died", *self._died(current, watch))
         finally:
             watch.kill()
 
@@ -239,8 +250,6 @@ class Driver:
             total, in_probe = counts.completed(in_progress), counts.completed_in_probe(in_progress)
             where += f", after {in_probe:,} FMI calls in this probe ({total:,} in this worker)"
             facts.update(call_count=total, calls_in_probe=in_probe)
-        if probe in self.run.by_name or any(r.code == probe for r in self.run.rules):
-            self.run.outcome.run.add(probe)
         if probe:
             self.died.append(probe)
         return probe, call, where, facts
@@ -252,31 +261,69 @@ class Driver:
         except OSError:
             return CallCounts(0, 0)
 
-    def _timed_out(self, current: str, per_fmu: bool) -> str:
+    def _timed_out(self, current: str, per_fmu: bool) -> tuple[str, str]:
+        """The probe that was stopped, and the reason when the limit was lsdae's own."""
         probe, call, where, facts = self._context(current)
-        if call and facts["call_in_progress"]:
-            self.blocked.append(call)
         limit = self.limits.fmu_seconds if per_fmu else self.limits.probe_seconds
         scope = "per FMU" if per_fmu else "per probe"
+        if not (call and facts["call_in_progress"]):  # the binary was not running: ours
+            option = "fmu_seconds" if per_fmu else "probe_seconds"
+            return probe, self._own_limit(
+                probe, f"time limit: lsdae's own computation in {self.run.names(probe)} took "
+                f"longer than the {limit:g} s limit {scope} ({option} of {TIMED_OUT}) while no "
+                f"FMI call was in progress ({where}); not the binary's fault")
+        if self._is_rule(probe):
+            self.run.outcome.run.add(probe)
+        self.blocked.append(call)
         self.run.emit(TIMED_OUT, Violation(
             f"the binary did not respond within the {limit:g} s limit {scope}: stopped "
             f"{where}, in {self.run.names(probe)}", Location(file=self.run.binary),
             evidence(facts, limit_seconds=limit, limit=scope, **self._stderr_evidence()),
             subject=call or probe))
-        return probe
+        return probe, ""
 
-    def _died(self, current: str, watch: WorkerProcess) -> str:
+    def _is_rule(self, probe: str) -> bool:
+        return probe in self.run.by_name or any(r.code == probe for r in self.run.rules)
+
+    def _own_limit(self, probe: str, reason: str) -> str:
+        log.debug("lsdae's own limit in %s: %s", self.run.names(probe), reason)
+        return reason
+
+    def _not_run_own(self, death: _Death) -> None:
+        """The probe a limit of lsdae's own stopped is not run, with the reason, and whether
+        a new worker takes over the probes after it (the one stopped cannot go on)."""
+        rule = next((r for r in self.run.rules if r.code == death.probe), None)
+        if rule is None:
+            return
+        done = {c for c, _ in self.run.outcome.skipped} | self.run.outcome.run
+        after = [r for r in self.remaining if r.code not in done and r.code != rule.code]
+        goes_on = after and death.kind in ("timeout", "died")
+        self.run.skip([rule], death.own + ("; the worker was stopped, and a new one runs the "
+                                           "probes after it" if goes_on else ""), failed=True)
+
+    def _died(self, current: str, watch: WorkerProcess) -> tuple[str, str]:
+        """The probe during which the worker died, and the reason when the limit it reached
+        was lsdae's own."""
         probe, call, where, facts = self._context(current)
         how = watch.how()
+        limit_mib = int(self.limits.address_space_mib)
+        memory = watch.memory_error or watch.peak() >= MEMORY_FRACTION * (limit_mib << 20)
+        if memory and not (call and facts["call_in_progress"]):  # ours: the binary was idle
+            return probe, self._own_limit(
+                probe, f"memory limit: lsdae's own computation in {self.run.names(probe)} "
+                f"exhausted the worker's {limit_mib} MiB address-space limit "
+                f"(address_space_mib of {MEMORY}) while no FMI call was in progress ({where}, "
+                f"{how}); not the binary's fault")
         if probe == "setup" and not call:  # died before touching the binary: our defect
             self.run.emit("internal-error", Violation(
                 f"the probe worker failed before loading the binary ({how}): "
                 f"{(self._stderr().splitlines() or ['no message'])[-1]}",
                 evidence=evidence(exit=how, **self._stderr_evidence())))
-            return probe
+            return probe, ""
+        if self._is_rule(probe):
+            self.run.outcome.run.add(probe)
         ev = evidence(facts, exit=how, **self._stderr_evidence())
-        limit_mib = int(self.limits.address_space_mib)
-        if watch.memory_error or watch.peak() >= MEMORY_FRACTION * (limit_mib << 20):
+        if memory:
             self.run.emit(MEMORY, Violation(
                 f"the binary exhausted the {limit_mib} MiB address-space limit {where}, in "
                 f"{self.run.names(probe)} ({how})", Location(file=self.run.binary),
@@ -285,4 +332,4 @@ class Driver:
             self.run.emit(CRASHED, Violation(
                 f"the binary crashed ({how}) {where}, in {self.run.names(probe)}",
                 Location(file=self.run.binary), ev, subject=call or probe))
-        return probe
+        return probe, ""

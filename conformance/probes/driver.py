@@ -9,10 +9,11 @@ endurance probes, also says after how many FMI calls). Each new worker is told t
 during which an earlier one died (``ProbeJob.died``). The run it serves
 (``conformance.probes.runner``) holds the outcome and the limits; its docstring gives the policy.
 
-A time or memory limit reached while *no* FMI call was in progress is lsdae's own: the binary
-was not running, so it is never a ``binary-*`` finding. The probe is listed as not run, with
-the limit and the reason ("lsdae's own computation ..."), and the worker that was stopped for
-it is replaced by a new one for the remaining probes, which says so too.
+What a death or a limit means, the binary's finding or lsdae's own limit, is decided by
+:class:`.deaths.Diagnosis` (its docstring gives the rule: a limit reached while no FMI call was
+in progress, or while only a short one was, is lsdae's own). For lsdae's own limits the probe is
+listed as not run, with the limit and the reason, and the worker that was stopped for it is
+replaced by a new one for the remaining probes, which the reason says too.
 """
 from __future__ import annotations
 
@@ -28,17 +29,13 @@ from typing import Any
 
 from ..catalogue import RuleSpec
 from ..findings import Location, Violation, evidence
-from ..runtime.callrecord import CallCounts, CallRecord
+from ..runtime.callrecord import CallRecord
 from ..runtime.protocol import Job, violation_from_json
 from ..runtime.supervisor import WorkerProcess
+from .deaths import CRASHED, MEMORY, NOT_LOADABLE, TIMED_OUT, CallClock, Diagnosis
 from .job import ENTRY, ProbeJob
-from .registry import ENDURANCE as COUNTED
 
-CRASHED, TIMED_OUT, MEMORY, NOT_LOADABLE = (
-    "binary-crashed", "binary-timed-out", "binary-memory-limit", "binary-not-loadable")
 RUNNER_RULES = (CRASHED, TIMED_OUT, MEMORY, NOT_LOADABLE)
-MEMORY_FRACTION = 0.8        # a death at this share of the address-space limit is "memory"
-STDERR_TAIL = 1500
 PACKAGE_ROOT = str(Path(__file__).resolve().parents[2])
 
 log = logging.getLogger(__name__)
@@ -62,6 +59,7 @@ class Driver:
         self.fmu_deadline = time.monotonic() + self.limits.fmu_seconds
         self.blocked: list[str] = []   # FMI functions that hung: not called again
         self.died: list[str] = []      # probes during which a worker died or was killed
+        self.diagnosis = Diagnosis(self)
 
     def drive(self) -> None:
         restarts, own = 0, 0
@@ -130,15 +128,19 @@ class Driver:
     def _one_worker(self) -> _Death:
         proc = self._start()
         watch = WorkerProcess(proc)
+        clock = CallClock(self.call_file)
         current = "setup"
         step_deadline = time.monotonic() + self.limits.probe_seconds
         try:
             while True:
+                clock.tick()
                 now = time.monotonic()
                 if now >= self.fmu_deadline or now >= step_deadline:
                     per_fmu = now >= self.fmu_deadline
                     watch.kill()
-                    probe, own = self._timed_out(current, per_fmu)
+                    probe_time = now - (step_deadline - self.limits.probe_seconds)
+                    probe, own = self.diagnosis.timed_out(current, per_fmu, clock.running(),
+                                                          probe_time)
                     return _Death("fmu-timeout" if per_fmu else "timeout", probe, own)
                 events, eof = watch.read(min(step_deadline, self.fmu_deadline) - now)
                 for event in events:
@@ -179,7 +181,7 @@ class Driver:
                         return _Death("end")
                 if eof:  # the channel closed before "end": whatever the exit status, a death
                     watch.finish()
-                    return _Death("died", *self._died(current, watch))
+                    return _Death("died", *self.diagnosis.died(current, watch))
         finally:
             watch.kill()
 
@@ -211,84 +213,6 @@ class Driver:
             if key not in ("points", "seed"):
                 outcome.info[key] = value
 
-    # -- findings --------------------------------------------------------------------------
-
-    def _record(self) -> tuple[str, str, bool]:
-        try:
-            with open(self.call_file, "rb") as fh:
-                return CallRecord.parse(fh.read(CallRecord.SIZE))
-        except OSError:
-            return "", "", False
-
-    def _stderr(self) -> str:
-        try:
-            with open(self.stderr_file, "rb") as fh:
-                fh.seek(max(0, os.path.getsize(self.stderr_file) - STDERR_TAIL))
-                text = fh.read().decode("utf-8", "replace").strip()
-        except OSError:
-            return ""
-        # paths of the temporary directory would make two reports of one FMU differ
-        return text.replace(os.path.join(self.tmp, "fmu") + os.sep, "").replace(self.tmp, "<tmp>")
-
-    def _stderr_evidence(self) -> dict[str, str]:
-        text = self._stderr()
-        return {"stderr": text} if text else {}
-
-    def _context(self, current: str) -> tuple[str, str, str, dict[str, Any]]:
-        probe, call, in_progress = self._record()
-        probe = probe or current
-        if not call:
-            where = "before any FMI call"
-        elif in_progress:
-            where = f"during {call}"
-        else:
-            where = f"after {call} had returned"
-        facts: dict[str, Any] = {"probe": probe, "call": call or None,
-                                 "call_in_progress": in_progress}
-        if call and probe in COUNTED:
-            counts = self._counts()
-            total, in_probe = counts.completed(in_progress), counts.completed_in_probe(in_progress)
-            where += f", after {in_probe:,} FMI calls in this probe ({total:,} in this worker)"
-            facts.update(call_count=total, calls_in_probe=in_probe)
-        if probe:
-            self.died.append(probe)
-        return probe, call, where, facts
-
-    def _counts(self) -> CallCounts:
-        try:
-            with open(self.call_file, "rb") as fh:
-                return CallRecord.counts(fh.read(CallRecord.SIZE))
-        except OSError:
-            return CallCounts(0, 0)
-
-    def _timed_out(self, current: str, per_fmu: bool) -> tuple[str, str]:
-        """The probe that was stopped, and the reason when the limit was lsdae's own."""
-        probe, call, where, facts = self._context(current)
-        limit = self.limits.fmu_seconds if per_fmu else self.limits.probe_seconds
-        scope = "per FMU" if per_fmu else "per probe"
-        if not (call and facts["call_in_progress"]):  # the binary was not running: ours
-            option = "fmu_seconds" if per_fmu else "probe_seconds"
-            return probe, self._own_limit(
-                probe, f"time limit: lsdae's own computation in {self.run.names(probe)} took "
-                f"longer than the {limit:g} s limit {scope} ({option} of {TIMED_OUT}) while no "
-                f"FMI call was in progress ({where}); not the binary's fault")
-        if self._is_rule(probe):
-            self.run.outcome.run.add(probe)
-        self.blocked.append(call)
-        self.run.emit(TIMED_OUT, Violation(
-            f"the binary did not respond within the {limit:g} s limit {scope}: stopped "
-            f"{where}, in {self.run.names(probe)}", Location(file=self.run.binary),
-            evidence(facts, limit_seconds=limit, limit=scope, **self._stderr_evidence()),
-            subject=call or probe))
-        return probe, ""
-
-    def _is_rule(self, probe: str) -> bool:
-        return probe in self.run.by_name or any(r.code == probe for r in self.run.rules)
-
-    def _own_limit(self, probe: str, reason: str) -> str:
-        log.debug("lsdae's own limit in %s: %s", self.run.names(probe), reason)
-        return reason
-
     def _not_run_own(self, death: _Death) -> None:
         """The probe a limit of lsdae's own stopped is not run, with the reason, and whether
         a new worker takes over the probes after it (the one stopped cannot go on)."""
@@ -301,35 +225,3 @@ class Driver:
         self.run.skip([rule], death.own + ("; the worker was stopped, and a new one runs the "
                                            "probes after it" if goes_on else ""), failed=True)
 
-    def _died(self, current: str, watch: WorkerProcess) -> tuple[str, str]:
-        """The probe during which the worker died, and the reason when the limit it reached
-        was lsdae's own."""
-        probe, call, where, facts = self._context(current)
-        how = watch.how()
-        limit_mib = int(self.limits.address_space_mib)
-        memory = watch.memory_error or watch.peak() >= MEMORY_FRACTION * (limit_mib << 20)
-        if memory and not (call and facts["call_in_progress"]):  # ours: the binary was idle
-            return probe, self._own_limit(
-                probe, f"memory limit: lsdae's own computation in {self.run.names(probe)} "
-                f"exhausted the worker's {limit_mib} MiB address-space limit "
-                f"(address_space_mib of {MEMORY}) while no FMI call was in progress ({where}, "
-                f"{how}); not the binary's fault")
-        if probe == "setup" and not call:  # died before touching the binary: our defect
-            self.run.emit("internal-error", Violation(
-                f"the probe worker failed before loading the binary ({how}): "
-                f"{(self._stderr().splitlines() or ['no message'])[-1]}",
-                evidence=evidence(exit=how, **self._stderr_evidence())))
-            return probe, ""
-        if self._is_rule(probe):
-            self.run.outcome.run.add(probe)
-        ev = evidence(facts, exit=how, **self._stderr_evidence())
-        if memory:
-            self.run.emit(MEMORY, Violation(
-                f"the binary exhausted the {limit_mib} MiB address-space limit {where}, in "
-                f"{self.run.names(probe)} ({how})", Location(file=self.run.binary),
-                ev + evidence(limit_mib=limit_mib), subject=call or probe))
-        else:
-            self.run.emit(CRASHED, Violation(
-                f"the binary crashed ({how}) {where}, in {self.run.names(probe)}",
-                Location(file=self.run.binary), ev, subject=call or probe))
-        return probe, ""

@@ -9,7 +9,9 @@ never loads the binary. ``LSDAE_FAKE_WORKER`` (``BEHAVIOUR:CODE``) says what pro
 * ``sleep-inside``: the same inside an FMI call (the call record says fmi3DoStep is running):
   the binary's fault;
 * ``memory-outside`` / ``memory-inside``: allocates until MemoryError (under the worker's
-  address-space limit), outside or inside a recorded FMI call.
+  address-space limit), outside or inside a recorded FMI call;
+* ``short-calls``: makes one short "FMI call" (10 ms, recorded) after another, forever: the
+  probe's time is spent in calls, but no call hangs.
 
 The other probes (and CODE in a worker started after one that it stopped) finish at once,
 without violations.
@@ -34,6 +36,15 @@ def _exhaust_memory() -> None:
         blocks.append(bytearray(64 << 20))
 
 
+def _short_calls(record: CallRecord) -> None:
+    count = 0
+    while True:
+        count += 1
+        record.enter("fmi3GetFloat64", count)
+        time.sleep(0.01)
+        record.leave()
+
+
 def run_job(job: Job, send: Callable[[dict[str, Any]], None]) -> int:
     with open(job.call_file, "r+b") as fh:
         record = CallRecord(mmap.mmap(fh.fileno(), CallRecord.SIZE))
@@ -48,6 +59,8 @@ def run_job(job: Job, send: Callable[[dict[str, Any]], None]) -> int:
             try:
                 if behaviour.startswith("sleep"):
                     time.sleep(600)
+                elif behaviour == "short-calls":
+                    _short_calls(record)
                 else:
                     _exhaust_memory()
             except MemoryError:

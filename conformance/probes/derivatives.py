@@ -191,19 +191,26 @@ def dependency_never_observed(ctx: ProbeContext, *, min_points: int) -> Iterator
     s = surveyed(ctx, min_points=min_points)
     layout = s.layout
     assert layout is not None
-    seen: dict[tuple[int, int], bool] = {}
+    n = len(layout.cols)
+    explicit = np.array([r.explicit for r in layout.rows], dtype=bool)
+    keys, moved = [], []
     for ps in s.points:
         e = ps.entries
-        for i, j, declared, zero in zip(e.rows.tolist(), e.cols.tolist(), e.declared, e.zero):
-            if declared and layout.rows[i].explicit:
-                seen[(i, j)] = seen.get((i, j), False) or not zero
-    for (i, j), moved in sorted(seen.items()):
-        if not moved:
-            yield Violation(
-                "the dependencies list {subject} but the unknown did not change at all when the "
-                "known was perturbed, at any sampling point", layout.rows[i].location,
-                evidence(entry=layout.entry(i, j), points=len(s.points)),
-                subject=layout.entry(i, j))
+        claim = e.declared & explicit[e.rows]
+        keys.append(e.rows[claim].astype(np.int64) * n + e.cols[claim])
+        moved.append(~e.zero[claim])
+    if not keys:
+        return
+    unique, at = np.unique(np.concatenate(keys), return_inverse=True)   # sorted by (i, j)
+    ever = np.zeros(unique.size, dtype=bool)
+    np.logical_or.at(ever, at, np.concatenate(moved))   # moved at some point
+    for k in unique[~ever].tolist():
+        i, j = divmod(k, n)
+        yield Violation(
+            "the dependencies list {subject} but the unknown did not change at all when the "
+            "known was perturbed, at any sampling point", layout.rows[i].location,
+            evidence(entry=layout.entry(i, j), points=len(s.points)),
+            subject=layout.entry(i, j))
 
 
 def dependencies_kind_violated(ctx: ProbeContext, *, rtol: float, margin: float,

@@ -27,6 +27,7 @@ log = logging.getLogger(__name__)
 
 FACT = "derivatives.survey"
 MAX_PROBE_ERRORS = 200
+MAX_PLOTTED_ENTRIES = 50_000   # declared and observed entries of the published sparsity
 
 
 @dataclass(frozen=True)
@@ -176,20 +177,30 @@ def _measure_point(ev, layout, point, result, colouring, row_colouring, rng, set
 
 
 def _publish_jacobian(ctx: ProbeContext, s: Survey) -> None:
+    """info["jacobian"] for the HTML report's sparsity plot: the declared entries of the rows
+    that claim them and the entries observed to move. A Jacobian of more than
+    ``MAX_PLOTTED_ENTRIES`` of them (a plot of which would show nothing) is summarised in
+    info["jacobian_left_out"] instead: its size and counts."""
     if s.layout is None:
         return
-    observed: set[tuple[int, int]] = set()
-    for ps in s.points:
-        e = ps.entries
-        moved = ~e.zero & (e.fd != 0)
-        observed.update(zip(e.rows[moved].tolist(), e.cols[moved].tolist()))
-    p = s.layout.pattern
+    layout = s.layout
+    n = len(layout.cols)
+    moved = [(e.rows.astype(np.int64) * n + e.cols)[~e.zero & (e.fd != 0)]
+             for e in (ps.entries for ps in s.points)]
+    observed = np.unique(np.concatenate(moved)) if moved else np.zeros(0, dtype=np.int64)
+    p = layout.pattern
+    explicit = np.array([r.explicit for r in layout.rows], dtype=bool)
+    declared = explicit[p.rows] if p.nnz else np.zeros(0, dtype=bool)
     info = ctx.facts.setdefault("info", {})
+    if int(declared.sum()) + observed.size > MAX_PLOTTED_ENTRIES:
+        info["jacobian_left_out"] = {
+            "rows": len(layout.rows), "cols": n, "declared": int(declared.sum()),
+            "observed": int(observed.size), "limit": MAX_PLOTTED_ENTRIES}
+        return
     info["jacobian"] = {
-        "rows": [r.name for r in s.layout.rows], "cols": [c.name for c in s.layout.cols],
-        "declared": [[i, j] for i, j in zip(p.rows.tolist(), p.cols.tolist())
-                     if s.layout.rows[i].explicit],
-        "observed": sorted([i, j] for i, j in observed)}
+        "rows": [r.name for r in layout.rows], "cols": [c.name for c in layout.cols],
+        "declared": np.column_stack([p.rows[declared], p.cols[declared]]).tolist(),
+        "observed": np.column_stack([observed // n, observed % n]).tolist()}
 
 
 def surveyed(ctx: ProbeContext, *, min_points: int = 1) -> Survey:

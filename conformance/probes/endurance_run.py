@@ -170,7 +170,7 @@ class _Walk:
         self.layout: Layout = layout_of(ctx)
         self.library: Any = ctx.facts["library"]
         self.run = PathRun(settings)
-        self.watch = list(dict.fromkeys([*self.layout.residuals, *self.layout.outputs]))
+        self.watch = tuple(dict.fromkeys([*self.layout.residuals, *self.layout.outputs]))
         self.nx = len(self.layout.states)
         self.run.budget_calls = self._budget_calls()
 

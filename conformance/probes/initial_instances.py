@@ -69,13 +69,13 @@ class InitialPoint:
     def __init__(self, factory: Factory, mode: str, layout: JacobianLayout, point: Point,
                  counter: InstanceCounter):
         self.factory, self.mode, self.layout, self.counter = factory, mode, layout, counter
-        self.rows = [r.vr for r in layout.rows]
+        self.rows = tuple(r.vr for r in layout.rows)   # tuples: converted once per call
         self.time = [j for j, c in enumerate(layout.cols) if c.role == "time"]
         self.t = point.t
         self.x = np.array([point.t if c.role == "time" else point.values[c.vr]
                            for c in layout.cols])
         self.dd_idx = np.flatnonzero(layout.dd_columns)
-        self.dd_vrs = [layout.cols[j].vr for j in self.dd_idx]
+        self.dd_vrs = tuple(layout.cols[j].vr for j in self.dd_idx)
         self.base: Any = None
 
     def _knowns(self, delta: np.ndarray) -> tuple[dict[int, float], float]:

@@ -67,9 +67,9 @@ class _At:
 
     def __init__(self, ev: Evaluator, layout: JacobianLayout, point: Point):
         self.ev, self.layout, self.point = ev, layout, point
-        self.row_vrs = [r.vr for r in layout.rows]
+        self.row_vrs = tuple(r.vr for r in layout.rows)   # tuples: converted once per call
         self.dd_idx = np.flatnonzero(layout.dd_columns)
-        self.dd_vrs = [layout.cols[j].vr for j in self.dd_idx]
+        self.dd_vrs = tuple(layout.cols[j].vr for j in self.dd_idx)
         self.time = [j for j, c in enumerate(layout.cols) if c.role == "time"]
         missing = [c.vr for c in layout.cols if c.role != "time" and c.vr not in point.values]
         known = dict(point.values)

@@ -6,10 +6,11 @@ the unknowns asked for, using the :class:`~conformance.runtime.layout.Layout` of
 from __future__ import annotations
 
 import ctypes
-from typing import Any, Mapping, Sequence
+from typing import Any, Sequence
 
 import numpy as np
 
+from .arrays import all_in, double_array, pick, present, vr_array
 from .errors import FmiError, Unavailable
 from .library import Library
 from .point import Point
@@ -21,52 +22,6 @@ __all__ = ["Dependency", "DiscreteStates", "Instance", "KnownNotSet", "PointNotS
 # fmi3DependencyKind in the order of the C enum; fmi3Independent has no XML counterpart (MS-13)
 DEPENDENCY_KINDS = ("independent", "constant", "fixed", "tunable", "discrete", "dependent")
 MAX_DEPENDENCIES = 10_000_000   # a larger count from the FMU is garbage, not an allocation
-
-
-def _vrs(values: Sequence[int]) -> Any:
-    """A C array of value references (through numpy: a large list converts in one pass)."""
-    try:
-        array = np.asarray(values, dtype=np.uint32)
-    except OverflowError:  # out of range (hostile XML): ctypes wraps it, as it always did
-        return (ctypes.c_uint * len(values))(*values)
-    return (ctypes.c_uint * len(array)).from_buffer_copy(array) if len(array) else \
-        (ctypes.c_uint * 0)()
-
-
-def _doubles(values: Sequence[float] | np.ndarray) -> Any:
-    """A C array of doubles (through numpy, as :func:`_vrs`)."""
-    array = np.asarray(values, dtype=np.float64)
-    return (ctypes.c_double * len(array)).from_buffer_copy(array) if len(array) else \
-        (ctypes.c_double * 0)()
-
-
-_SETS: dict[int, tuple[tuple[int, ...], frozenset[int]]] = {}
-
-
-def _as_set(vrs: Sequence[int]) -> frozenset[int]:
-    """``vrs`` as a set; the layout's tuples (which live as long as the worker) are made sets
-    once, by identity, since they are passed again at every evaluation."""
-    if not isinstance(vrs, tuple):
-        return frozenset(vrs)
-    held = _SETS.get(id(vrs))
-    if held is None or held[0] is not vrs:
-        held = _SETS[id(vrs)] = (vrs, frozenset(vrs))
-    return held[1]
-
-
-def _all_in(vrs: Sequence[int], values: Mapping[int, float]) -> bool:
-    return values.keys() >= _as_set(vrs)
-
-
-def _present(vrs: Sequence[int], values: Mapping[int, float]) -> list[int]:
-    """``vrs`` that ``values`` holds, in order (all of them, usually: one set operation)."""
-    keys = values.keys()
-    return list(vrs) if keys >= _as_set(vrs) else [vr for vr in vrs if vr in keys]
-
-
-def _pick(values: Mapping[int, float], vrs: Sequence[int]) -> list[float]:
-    """``values[vr]`` for each of ``vrs`` (a C-level loop: thousands per call)."""
-    return list(map(values.__getitem__, vrs))
 
 
 class Instance:
@@ -88,6 +43,7 @@ class Instance:
         self.mode = "ode"
         self.started = ""
         self.calls = 0
+        self._joined: dict[tuple[int, int], tuple[Any, Any, tuple[int, ...]]] = {}
         self.failure: FmiError | None = None
         self.initialised = False
         self.initializing = False    # in Initialization Mode, where fmi3Terminate is not allowed
@@ -188,29 +144,29 @@ class Instance:
 
     def set_boolean(self, vr: int, value: bool) -> None:
         values = (ctypes.c_bool * 1)(value)
-        self._fmi("fmi3SetBoolean", _vrs([vr]), 1, values, 1)
+        self._fmi("fmi3SetBoolean", vr_array([vr]), 1, values, 1)
 
     def get_boolean(self, vr: int) -> bool:
         values = (ctypes.c_bool * 1)()
-        self._fmi("fmi3GetBoolean", _vrs([vr]), 1, values, 1)
+        self._fmi("fmi3GetBoolean", vr_array([vr]), 1, values, 1)
         return bool(values[0])
 
     def get_float64(self, vrs: Sequence[int]) -> np.ndarray:
         out = np.zeros(len(vrs))
         if vrs:
-            self._fmi("fmi3GetFloat64", _vrs(vrs), len(vrs),
+            self._fmi("fmi3GetFloat64", vr_array(vrs), len(vrs),
                       out.ctypes.data_as(ctypes.POINTER(ctypes.c_double)), len(vrs))
         return out
 
     def set_float64(self, vrs: Sequence[int], values: Sequence[float] | np.ndarray) -> None:
         if vrs:
-            self._fmi("fmi3SetFloat64", _vrs(vrs), len(vrs), _doubles(values), len(vrs))
+            self._fmi("fmi3SetFloat64", vr_array(vrs), len(vrs), double_array(values), len(vrs))
 
     def set_time(self, t: float) -> None:
         self._fmi("fmi3SetTime", float(t))
 
     def set_states(self, values: Sequence[float] | np.ndarray) -> None:
-        self._fmi("fmi3SetContinuousStates", _doubles(values), len(values))
+        self._fmi("fmi3SetContinuousStates", double_array(values), len(values))
 
     def get_states(self, n: int) -> np.ndarray:
         out = np.zeros(n)
@@ -248,21 +204,32 @@ class Instance:
         self._known("time", (), lambda: self.set_time(point.t))
         values = point.values
         states = self.layout.states_for(self.mode)
-        if states and _all_in(states, values):
-            self._known("states", states, lambda: self.set_states(_pick(values, states)))
+        if states and all_in(states, values):
+            self._known("states", states, lambda: self.set_states(pick(values, states)))
         dae = self.mode == "dae" and algebraic
-        alg = _present(self.layout.algebraic if dae else (), values)
-        inputs = _present(self.layout.inputs, values)
-        knowns = [*alg, *inputs]
+        alg = present(self.layout.algebraic if dae else (), values)
+        inputs = present(self.layout.inputs, values)
+        knowns = self._knowns(alg, inputs)
         kind = ("algebraic variables and inputs" if alg and inputs
                 else "algebraic variables" if alg else "inputs")
-        self._known(kind, knowns, lambda: self.set_float64(knowns, _pick(values, knowns)))
+        self._known(kind, knowns, lambda: self.set_float64(knowns, pick(values, knowns)))
 
     def set_algebraic(self, point: Point) -> None:
         """Set the algebraic variables of ``point`` alone (a :class:`KnownNotSet` if refused)."""
-        alg = _present(self.layout.algebraic, point.values)
+        alg = present(self.layout.algebraic, point.values)
         self._known("algebraic variables", alg,
-                    lambda: self.set_float64(alg, _pick(point.values, alg)))
+                    lambda: self.set_float64(alg, pick(point.values, alg)))
+
+    def _knowns(self, alg: Sequence[int], inputs: Sequence[int]) -> Sequence[int]:
+        """``alg`` then ``inputs``: one tuple per pair of the layout's tuples (kept, so the
+        value references are converted once), a new list otherwise."""
+        if not (isinstance(alg, tuple) and isinstance(inputs, tuple)):
+            return [*alg, *inputs]
+        key = (id(alg), id(inputs))
+        held = self._joined.get(key)
+        if held is None or held[0] is not alg or held[1] is not inputs:
+            held = self._joined[key] = (alg, inputs, (*alg, *inputs))
+        return held[2]
 
     def _known(self, kind: str, vrs: Sequence[int], action: Any) -> None:
         try:
@@ -330,7 +297,7 @@ class Instance:
                     seed: np.ndarray, n_out: int) -> np.ndarray:
         seed = np.asarray(seed, dtype=float)
         out = np.zeros(n_out)
-        self._fmi(fname, _vrs(list(unknowns)), len(unknowns), _vrs(list(knowns)), len(knowns),
-                  _doubles(seed), len(seed), out.ctypes.data_as(ctypes.POINTER(ctypes.c_double)),
+        self._fmi(fname, vr_array(unknowns), len(unknowns), vr_array(knowns), len(knowns),
+                  double_array(seed), len(seed), out.ctypes.data_as(ctypes.POINTER(ctypes.c_double)),
                   n_out)
         return out

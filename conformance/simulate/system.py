@@ -62,7 +62,8 @@ class _Coloured:
 
     def __init__(self, inst, rows: list[int], cols: list[int], pattern: col.Pattern,
                  nominal: np.ndarray, use_directional: bool, *, sparse: bool = False):
-        self.inst, self.rows, self.cols, self.pattern = inst, rows, cols, pattern
+        self.inst, self.pattern = inst, pattern
+        self.rows, self.cols = tuple(rows), tuple(cols)   # tuples: converted once per call
         self.nominal = nominal
         self.colouring = col.colour_columns(pattern)
         self.use_directional = use_directional
@@ -172,8 +173,8 @@ class FmuDae(_Events):
     def __init__(self, inst, layout, manifest, *, dense_up_to: int,
                  use_directional: bool = True):
         self.inst, self.layout = inst, layout
-        self.states, self.algebraic = list(layout.states), list(layout.algebraic)
-        self.derivatives, self.residuals = list(layout.derivatives), list(layout.residuals)
+        self.states, self.algebraic = tuple(layout.states), tuple(layout.algebraic)
+        self.derivatives, self.residuals = tuple(layout.derivatives), tuple(layout.residuals)
         self.nx, self.nw = len(self.states), len(self.algebraic)
         cols = [*self.states, *self.algebraic]
         self.names = [layout.name(vr) for vr in cols]
@@ -232,8 +233,8 @@ class FmuOde(_Events):
     def __init__(self, inst, layout, model, *, dense_up_to: int,
                  use_directional: bool = True):
         self.inst, self.layout = inst, layout
-        self.states, self.derivatives = list(layout.ode_states), list(layout.ode_derivatives)
-        self.algebraic = list(layout.algebraic)
+        self.states, self.derivatives = tuple(layout.ode_states), tuple(layout.ode_derivatives)
+        self.algebraic = tuple(layout.algebraic)
         self.nx = len(self.states)
         self.names = [layout.name(vr) for vr in self.states]
         self.algebraic_names = [layout.name(vr) for vr in self.algebraic]

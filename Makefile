@@ -46,6 +46,7 @@ bench: $(STAMP)
 	$(BIN)/python -m bench.probe_bench --out reports/bench
 	$(BIN)/python -m bench.sim_bench --out reports/bench
 	$(BIN)/python -m bench.startup_bench --out reports/bench
+	$(BIN)/python -m bench.scale_bench --out reports/bench
 
 clean:
 	rm -rf build .cache

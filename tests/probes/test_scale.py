@@ -129,3 +129,28 @@ def test_the_same_fmu_gets_the_same_report_on_a_busy_machine():
         busy.wait()
     _clean(quiet)
     assert loaded == quiet
+
+
+def test_scale_bench_counts_nonzeros_and_sums_families():
+    from bench import scale_bench as sb  # the benchmark harness: only for this test
+
+    assert sb.structural_nonzeros(chain.build_chain(4)) == 3 * 4 + 3
+    assert sb.structural_nonzeros(blocks.build_blocks(30)) == 3 + 10 * 20 + 10 * 30 + 10 * 20 + 20
+    steps = [{"probe": "setup", "seconds": 1.0, "calls": 14, "peak_rss": 100},
+             {"probe": "DAE740", "seconds": 2.0, "calls": 30, "peak_rss": 300},
+             {"probe": "DAE741", "seconds": 0.5, "calls": 0, "peak_rss": 200}]
+    fams = sb.families(steps)
+    assert fams["setup"] == {"seconds": 1.0, "calls": 14, "peak_rss": 100}
+    assert fams["derivatives"] == {"seconds": 2.5, "calls": 30, "peak_rss": 300}
+    run = {"seconds": 3.0, "worker_peak_rss": 300 << 20, "parent_peak_rss": 50 << 20,
+           "load": [1.0, 1.0], "findings": [], "rules_not_run": [], "steps": steps}
+    result = {"scene": "Chain", "n": 1000, "nnz": 3003, **sb.summarise([run, run])}
+    big = {**result, "n": 10000, "nnz": 30003, "seconds": 20.0}
+    targets = {t["target"]: t["met"] for t in sb.targets([result, big])}
+    assert targets["time(10,000) / time(1,000) <= 12"] is True
+    assert targets["full check at 10,000 <= 30 s"] is True
+    text = sb.render_markdown({"date": "d", "machine": {"cpu": "c", "usable_cores": 2,
+                                                        "platform": "p", "python": "3"},
+                               "runs": 2, "command": "c", "results": [result, big],
+                               "targets": sb.targets([result, big]), "baseline": []})
+    assert "| Chain | 10,000 | 30,003 | 20.00 |" in text

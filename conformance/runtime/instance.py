@@ -298,6 +298,6 @@ class Instance:
         seed = np.asarray(seed, dtype=float)
         out = np.zeros(n_out)
         self._fmi(fname, vr_array(unknowns), len(unknowns), vr_array(knowns), len(knowns),
-                  double_array(seed), len(seed), out.ctypes.data_as(ctypes.POINTER(ctypes.c_double)),
-                  n_out)
+                  double_array(seed), len(seed),
+                  out.ctypes.data_as(ctypes.POINTER(ctypes.c_double)), n_out)
         return out

@@ -190,11 +190,13 @@ class Driver:
         in the outcome and logged (``lsdae check -v``), never in the report."""
         if not isinstance(stats, dict):
             return
-        entry = {"probe": step, **{k: stats.get(k) for k in ("seconds", "calls", "peak_rss")}}
+        entry = {"probe": step, **{k: stats.get(k) for k in ("seconds", "calls", "fmi_seconds",
+                                                                 "peak_rss")}}
         self.run.outcome.stats.append(entry)
         peak = entry["peak_rss"]
-        log.debug("%s: %.3f s, %s FMI calls, peak resident %s", self.run.names(step),
-                  float(entry["seconds"] or 0.0), entry["calls"],
+        log.debug("%s: %.3f s (%.3f s in the binary), %s FMI calls, peak resident %s",
+                  self.run.names(step), float(entry["seconds"] or 0.0),
+                  float(entry["fmi_seconds"] or 0.0), entry["calls"],
                   f"{peak / (1 << 20):.0f} MiB" if isinstance(peak, int) else "unknown",
                   extra={"probe_stats": entry})
 

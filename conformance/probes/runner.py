@@ -79,7 +79,8 @@ class ProbeOutcome:
     skipped: set[tuple[str, str]] = field(default_factory=set)
     not_run: set[tuple[str, str]] = field(default_factory=set)   # the failed part of skipped
     info: dict[str, Any] = field(default_factory=dict)
-    # what each step of the workers cost: {"probe", "seconds", "calls", "peak_rss"}; logged,
+    # what each step of the workers cost: {"probe", "seconds", "calls", "fmi_seconds",
+    # "peak_rss"}; logged,
     # never part of the report (it differs from run to run)
     stats: list[dict[str, Any]] = field(default_factory=list)
 

@@ -9,7 +9,7 @@ the points, and runs each probe in turn, sending one JSON event per step:
     {"event": "load-failed", "violation": {...}}  the binary cannot be loaded
     {"event": "start", "code": "DAE7xx"}
     {"event": "done", "code": ..., "violations": [...], "skipped": reason|null, "info": {...},
-     "stats": {"seconds": s, "calls": n, "peak_rss": bytes}}
+     "stats": {"seconds": s, "calls": n, "fmi_seconds": s, "peak_rss": bytes}}
     {"event": "memory", "code": ...}              Python itself ran out of memory
     {"event": "fatal", "code": ...}               a call returned fmi3Fatal: this process stops,
                                                   a fresh one runs the remaining probes
@@ -73,7 +73,8 @@ class _Stage:
             return 0
         ctx = self._context(library, layout)
         self.send({"event": "ready", "info": self._info(ctx.facts["info"]),
-                   "memory": memory_info(), "stats": _stats(started, library.calls)})
+                   "memory": memory_info(),
+                   "stats": _stats(started, library.calls, library.seconds)})
         for code, name, options in self.payload.probes:
             renew_failed(ctx)  # a probe never inherits an instance another one terminated
             self._probe(ctx, record, code, name, options)
@@ -126,8 +127,8 @@ class _Stage:
                options: dict[str, Any]) -> None:
         record.set_probe(code)
         self.send({"event": "start", "code": code})
-        library = ctx.facts["library"]
-        calls = library.calls  # type: ignore[attr-defined]
+        library: Any = ctx.facts["library"]
+        calls, inside = library.calls, library.seconds
         reset_peak_memory()
         started = time.perf_counter()
         violations: list[Any] = []
@@ -152,7 +153,7 @@ class _Stage:
         self.send({"event": "done", "code": code,
                    "violations": [violation_json(v) for v in violations],
                    "skipped": skipped, "info": self._info(ctx.facts.get("info", {})),
-                   "stats": _stats(started, library.calls - calls)})  # type: ignore[attr-defined]
+                   "stats": _stats(started, library.calls - calls, library.seconds - inside)})
 
 
 # Info values a probe publishes once as a new object and never changes in place: sent again
@@ -160,8 +161,9 @@ class _Stage:
 PUBLISHED_ONCE = ("points", "seed", "jacobian", "simulation")
 
 
-def _stats(started: float, calls: int) -> dict[str, Any]:
-    """What a step cost: wall seconds since ``started``, ``calls`` FMI calls, the peak
-    resident size since the last :func:`reset_peak_memory` (bytes; None off Linux)."""
+def _stats(started: float, calls: int, inside: float) -> dict[str, Any]:
+    """What a step cost: wall seconds since ``started``, ``calls`` FMI calls and ``inside``
+    seconds in them, the peak resident size since the last :func:`reset_peak_memory` (bytes;
+    None off Linux)."""
     return {"seconds": round(time.perf_counter() - started, 6), "calls": int(calls),
-            "peak_rss": memory_info(("VmHWM",)).get("VmHWM")}
+            "fmi_seconds": round(inside, 6), "peak_rss": memory_info(("VmHWM",)).get("VmHWM")}

@@ -140,8 +140,9 @@ def test_scale_bench_counts_nonzeros_and_sums_families():
              {"probe": "DAE740", "seconds": 2.0, "calls": 30, "peak_rss": 300},
              {"probe": "DAE741", "seconds": 0.5, "calls": 0, "peak_rss": 200}]
     fams = sb.families(steps)
-    assert fams["setup"] == {"seconds": 1.0, "calls": 14, "peak_rss": 100}
-    assert fams["derivatives"] == {"seconds": 2.5, "calls": 30, "peak_rss": 300}
+    assert fams["setup"] == {"seconds": 1.0, "fmi_seconds": 0.0, "calls": 14, "peak_rss": 100}
+    assert fams["derivatives"] == {"seconds": 2.5, "fmi_seconds": 0.0, "calls": 30,
+                                   "peak_rss": 300}
     run = {"seconds": 3.0, "worker_peak_rss": 300 << 20, "parent_peak_rss": 50 << 20,
            "load": [1.0, 1.0], "findings": [], "rules_not_run": [], "steps": steps}
     result = {"scene": "Chain", "n": 1000, "nnz": 3003, **sb.summarise([run, run])}

@@ -181,8 +181,9 @@ def test_sparse_and_dense_integration_give_the_same_trajectory():
     y0 = np.zeros(n + 1)
     y0[0] = 1.0
     runs = []
-    for sparse in (False, True):
-        settings = sim_settings(dense_up_to=10 if sparse else 10_000, rtol=1e-8)
+    for sparse in (False, True):   # the safety net out of the way: a loaded machine is slow
+        settings = sim_settings(dense_up_to=10 if sparse else 10_000, rtol=1e-8,
+                                wall_seconds=300.0)
         runs.append(integrate_dae(_Chain(n, sparse), settings, t0=0.0, y0=y0, stop=1.0))
     assert all(r.ok for r in runs), [r.message for r in runs]
     np.testing.assert_allclose(runs[1].values, runs[0].values, rtol=1e-6, atol=1e-10)
@@ -194,7 +195,8 @@ def test_a_sparse_integration_of_10000_unknowns_stays_small():
     y0 = np.zeros(n + 1)
     y0[0] = 1.0
     before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
-    traj = integrate_dae(_Chain(n, True), sim_settings(), t0=0.0, y0=y0, stop=1.0)
+    traj = integrate_dae(_Chain(n, True), sim_settings(wall_seconds=300.0), t0=0.0, y0=y0,
+                         stop=1.0)
     grown_mib = (resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before) / 1024
     assert traj.ok, traj.message
     assert grown_mib < 200   # a dense iteration matrix alone would be 763 MiB
@@ -229,7 +231,7 @@ def test_cvode_with_a_sparse_jacobian_matches_the_dense_one():
     n = 400
     x0 = np.sin(np.linspace(0, np.pi, n))
     runs = [integrate_ode(_Diffusion(n, sparse), sim_settings(
-        dense_up_to=10 if sparse else 10_000, rtol=1e-8), t0=0.0, x0=x0, stop=1.0)
-        for sparse in (False, True)]
+        dense_up_to=10 if sparse else 10_000, rtol=1e-8, wall_seconds=300.0), t0=0.0, x0=x0,
+        stop=1.0) for sparse in (False, True)]
     assert all(r.ok for r in runs), [r.message for r in runs]
     np.testing.assert_allclose(runs[1].values, runs[0].values, rtol=1e-6, atol=1e-10)

@@ -72,7 +72,7 @@ def _initial_slope(system: DaeSystem, t0: float, y: np.ndarray) -> np.ndarray:
 
 def _callbacks(run: _Run):
     system, nx = run.system, run.system.nx
-    eye = np.eye(nx)
+    diagonal = np.arange(nx)            # the differential rows' diagonal (no nx x nx identity)
     shift = np.zeros(nx + system.nw)   # -cj on the differential rows (the sparse template)
 
     def residual(t: float, y: np.ndarray, yp: np.ndarray, out: np.ndarray) -> None:
@@ -118,7 +118,7 @@ def _callbacks(run: _Run):
             run.template.fill(jac, out, diagonal_shift=shift)
             return
         out[:, :] = jac
-        out[:nx, :nx] -= cj * eye
+        out[diagonal, diagonal] -= cj
 
     return residual, jacobian, events
 

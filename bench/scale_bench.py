@@ -231,7 +231,7 @@ def render_markdown(data: dict[str, Any]) -> str:
         lines += ["", f"## Side by side: the Chain with `{data['baseline_tree']}`", "",
                   "The same FMUs, checked in the same runs, interleaved (medians). The issue's "
                   "false verdicts are those of this baseline.", "",
-                  "| N | this tree (s) | baseline (s) | ratio | baseline worker peak (MiB) | "
+                  "| N | this tree (s) | baseline (s) | ratio | baseline parent peak (MiB) | "
                   "baseline findings | baseline rules not run |", "|---|---|---|---|---|---|---|"]
         ours = {r["n"]: r for r in data["results"] if r["scene"] == "Chain"}
         for b in data["baseline"]:
@@ -239,9 +239,11 @@ def render_markdown(data: dict[str, Any]) -> str:
             names = ", ".join(sorted({f["name"] for f in b["findings"]})) or "none"
             lines.append(
                 f"| {b['n']:,} | {o['seconds']:.2f} | {b['seconds']:.2f} | "
-                f"{b['seconds'] / o['seconds']:.2f} | {b['worker_peak_mib']:.0f} | {names} | "
+                f"{b['seconds'] / o['seconds']:.2f} | {b['parent_peak_mib']:.0f} | {names} | "
                 f"{len(b['rules_not_run'])} |" if o else f"| {b['n']:,} | – | {b['seconds']:.2f} "
-                f"| – | {b['worker_peak_mib']:.0f} | {names} | {len(b['rules_not_run'])} |")
+                f"| – | {b['parent_peak_mib']:.0f} | {names} | {len(b['rules_not_run'])} |")
+        lines += ["", "A tree that does not log its probe steps (the baseline) shows no worker "
+                  "figures; its parent's peak is given instead."]
     lines += [
         "", "## Per probe family", "",
         "Each cell: seconds (of which inside the binary's functions) / FMI calls / the "

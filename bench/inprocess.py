@@ -12,8 +12,8 @@ from pathlib import Path
 
 from lxml import etree
 
-from conformance.manifest import MANIFEST, read_manifest
-from conformance.model import read_model_description
+from conformance.model.manifest import MANIFEST, read_manifest
+from conformance.model.description import read_model_description
 
 
 class LoadedFmu:

@@ -44,11 +44,11 @@ from lxml import etree
 
 from bench.inprocess import LoadedFmu
 from bench.static_bench import machine_info
-from conformance.manifest import read_manifest
-from conformance.model import read_model_description
+from conformance.model.manifest import read_manifest
+from conformance.model.description import read_model_description
 from conformance.numerics import colouring as col
 from conformance.numerics import measure
-from conformance.catalogue import default_catalogue
+from conformance.report.catalogue import default_catalogue
 from conformance.probes.registry import PROBES
 from conformance.probes import jacobian as J
 from conformance.numerics import numdiff

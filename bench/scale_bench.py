@@ -37,7 +37,7 @@ from typing import Any, Callable, Sequence
 from lxml import etree
 
 from bench.static_bench import machine_info
-from conformance.manifest import MANIFEST
+from conformance.model.manifest import MANIFEST
 from conformance.probes.registry import FAMILY_OF
 from scenes.Blocks import blocks
 from scenes.Chain import chain

@@ -2,7 +2,7 @@
 
     python -m bench.scale_case FMU [--endurance quick] [--rule-option CODE.key=value ...]
 
-Runs the command line's own entry (``conformance.cli.main``) with the default options and a
+Runs the command line's own entry (``conformance.commands.cli.main``) with the default options and a
 JSON report, and prints one JSON object: the wall time of the whole check, this process's peak
 resident size, what each step of the probe worker cost (seconds, FMI calls, peak resident size,
 from the driver's log records, ``conformance.probes.driver``), and the verdicts (findings by
@@ -35,7 +35,7 @@ class _Collect(logging.Handler):
 
 
 def run_case(fmu: Path, extra: Sequence[str] = ()) -> dict[str, Any]:
-    from conformance import cli
+    from conformance.commands import cli
 
     collect = _Collect()
     driver_log = logging.getLogger("conformance.probes.driver")

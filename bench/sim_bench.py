@@ -163,7 +163,7 @@ class SceneFmu(LoadedFmu):
 
 
 def settings_for(rtol: float, reference: Reference) -> Any:
-    from conformance.catalogue import default_catalogue
+    from conformance.report.catalogue import default_catalogue
     from conformance.numerics.settings import Settings
 
     options = dict(default_catalogue()["simulation-failed"].option_values)  # the defaults

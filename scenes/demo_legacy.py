@@ -9,7 +9,7 @@ import sys
 import zipfile
 from pathlib import Path
 
-from conformance.manifest import MANIFEST
+from conformance.model.manifest import MANIFEST
 
 FORMULATION_MANIFEST = """<?xml version="1.0" encoding="UTF-8"?>
 <fmiLayeredStandardManifest

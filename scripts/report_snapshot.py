@@ -20,7 +20,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-from conformance.engine import EngineOptions, check_paths
+from conformance.run.engine import EngineOptions, check_paths
 from conformance.reporters import json_report
 
 

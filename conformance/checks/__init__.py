@@ -6,7 +6,7 @@ the static part of the catalogue match one to one.
 """
 from __future__ import annotations
 
-from ..context import Check
+from .context import Check
 from . import (
     algebraic,
     attribute_values,

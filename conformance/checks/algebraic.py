@@ -17,11 +17,11 @@ from collections.abc import Iterator, Sequence
 from itertools import repeat
 from operator import attrgetter, is_not
 
-from ..context import Check, CheckContext
-from ..findings import Location, Violation, evidence
-from ..manifest import Manifest, VrRef
-from ..model import FLOAT_TYPES, ModelDescription, Variable
-from ..unknowns import parse_uint
+from .context import Check, CheckContext
+from ..report.findings import Location, Violation, evidence
+from ..model.manifest import Manifest, VrRef
+from ..model.description import FLOAT_TYPES, ModelDescription, Variable
+from ..model.unknowns import parse_uint
 from .listing import (
     Problems,
     classified,

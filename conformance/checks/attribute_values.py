@@ -3,7 +3,7 @@
 A NaN or infinite ``start`` or ``nominal``, an empty range (``min = INF``, ``max = -INF``, NaN),
 a ``nominal`` of zero or below, and ``min > max`` are faults of the XML that importers inherit:
 tolerances ``atol = nominal * rtol`` become zero or negative, start values poison the first
-step. The reading is :mod:`conformance.attributes`, shared with the probes' layout, so that no
+step. The reading is :mod:`conformance.model.attributes`, shared with the probes' layout, so that no
 probe samples from (or blames the binary for) a value flagged here.
 """
 from __future__ import annotations
@@ -11,16 +11,16 @@ from __future__ import annotations
 from collections.abc import Iterable, Iterator
 from operator import attrgetter
 
-from ..attributes import (
+from ..model.attributes import (
     MIN_ABOVE_MAX,
     NOMINAL_NOT_POSITIVE,
     NOT_FINITE,
     Problem,
     attribute_problems,
 )
-from ..context import Check, CheckContext
-from ..findings import Violation, evidence
-from ..model import FLOAT_TYPES, ModelDescription, Variable, VariableDetails
+from .context import Check, CheckContext
+from ..report.findings import Violation, evidence
+from ..model.description import FLOAT_TYPES, ModelDescription, Variable, VariableDetails
 from .model_analysis import analyse, var_loc
 
 _ADVICE = {

@@ -17,10 +17,10 @@ from __future__ import annotations
 from collections.abc import Iterator
 from typing import NamedTuple
 
-from ..context import Check, CheckContext
-from ..findings import Location, Violation, evidence
-from ..manifest import Manifest
-from ..model import ModelDescription
+from .context import Check, CheckContext
+from ..report.findings import Location, Violation, evidence
+from ..model.manifest import Manifest
+from ..model.description import ModelDescription
 from .algebraic import element_count
 
 

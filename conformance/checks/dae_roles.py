@@ -9,10 +9,10 @@ from collections.abc import Iterable
 from dataclasses import dataclass
 from operator import attrgetter
 
-from ..context import CheckContext
-from ..manifest import Manifest, VrRef
-from ..model import ModelDescription, Variable
-from ..unknowns import Unknown
+from .context import CheckContext
+from ..model.manifest import Manifest, VrRef
+from ..model.description import ModelDescription, Variable
+from ..model.unknowns import Unknown
 
 
 @dataclass(frozen=True)

@@ -2,7 +2,7 @@
 
 The manifest points at it with ``<EnableDAEParameter valueReference=..>`` (alpha.1),
 ``<EnableDAE valueReference=..>`` or a root attribute ``enableDAEModeVariable`` (older drafts, by
-value reference or by name); :mod:`conformance.manifest` reads all of them into
+value reference or by name); :mod:`conformance.model.manifest` reads all of them into
 ``Manifest.enables``.
 The variable must be a scalar Boolean structural parameter, fixed or tunable, with start false
 (MV-40, MV-42, SG-02). Each rule here checks one property, and only once the reference resolves,
@@ -13,10 +13,10 @@ from __future__ import annotations
 from operator import attrgetter
 from typing import Iterator
 
-from ..context import CheckContext
-from ..findings import Location, Violation, evidence
-from ..manifest import VrRef
-from ..model import Variable
+from .context import CheckContext
+from ..report.findings import Location, Violation, evidence
+from ..model.manifest import VrRef
+from ..model.description import Variable
 from .model_analysis import analyse
 
 SETTABLE_VARIABILITIES = ("fixed", "tunable")

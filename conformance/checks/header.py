@@ -8,10 +8,10 @@ from __future__ import annotations
 import re
 from typing import Iterator
 
-from ..context import CheckContext
-from ..drafts.detect import ALPHA1, ALPHA1_DESCRIPTION, ALPHA1_NAME, ALPHA1_VERSION
-from ..findings import Location, Violation, evidence
-from ..manifest import MANIFEST, Manifest
+from .context import CheckContext
+from ..model.drafts.detect import ALPHA1, ALPHA1_DESCRIPTION, ALPHA1_NAME, ALPHA1_VERSION
+from ..report.findings import Location, Violation, evidence
+from ..model.manifest import MANIFEST, Manifest
 
 MANIFEST_FILE = "fmi-ls-manifest.xml"
 

@@ -4,8 +4,8 @@ The residual/algebraic-variable graph comes from the manifest ``dependencies`` o
 (an absent attribute means "depends on every algebraic variable", an empty one "on none", MS-20;
 entries that are not algebraic variables do not count). Array variables are expanded into their
 elements; since dependencies are per variable (MS-13), each element of a residual depends on every
-element of the algebraic variables it lists. The graph work is in :mod:`conformance.bipartite`,
-:mod:`conformance.matching` and :mod:`conformance.dulmage_mendelsohn`.
+element of the algebraic variables it lists. The graph work is in :mod:`conformance.numerics.graphs.bipartite`,
+:mod:`conformance.numerics.graphs.matching` and :mod:`conformance.numerics.graphs.dulmage_mendelsohn`.
 """
 from __future__ import annotations
 
@@ -16,16 +16,16 @@ from math import prod
 from operator import attrgetter
 from typing import TYPE_CHECKING, Iterable, Iterator, Sequence
 
-from ..context import Check, CheckContext
-from ..findings import Location, Violation, evidence
-from ..manifest import VrRef
-from ..model import ModelDescription, Variable
-from ..unknowns import Unknown
+from .context import Check, CheckContext
+from ..report.findings import Location, Violation, evidence
+from ..model.manifest import VrRef
+from ..model.description import ModelDescription, Variable
+from ..model.unknowns import Unknown
 from .listing import Resolution, resolution
 from .model_analysis import analyse
 
 if TYPE_CHECKING:
-    from ..dulmage_mendelsohn import DulmageMendelsohn
+    from ..numerics.graphs.dulmage_mendelsohn import DulmageMendelsohn
 
 log = logging.getLogger(__name__)
 
@@ -176,7 +176,7 @@ def _greedy_matching_size(row_deps: Sequence[list[int] | None], n_cols: int) -> 
     left. Any matching is at most maximum, so when this one already has full size the graph
     is structurally non-singular; it does for the usual near-diagonal patterns, which spares
     loading scipy. Otherwise Hopcroft-Karp and Dulmage-Mendelsohn decide
-    (conformance.dulmage_mendelsohn).
+    (conformance.numerics.graphs.dulmage_mendelsohn).
     """
     taken = bytearray(n_cols)
     size = full = 0
@@ -216,8 +216,8 @@ def index1_structurally_singular(ctx: CheckContext, *, max_names: int, max_evide
     needed = min(len(rows), len(cols))
     if _greedy_matching_size(row_deps, len(cols)) >= needed:
         return  # a matching of full size was found without the graph machinery
-    from ..bipartite import BipartitePattern  # scipy: only when needed
-    from ..dulmage_mendelsohn import dulmage_mendelsohn  # scipy: only when needed
+    from ..numerics.graphs.bipartite import BipartitePattern  # scipy: only when needed
+    from ..numerics.graphs.dulmage_mendelsohn import dulmage_mendelsohn  # scipy: only when needed
 
     dm = dulmage_mendelsohn(BipartitePattern.from_rows(row_deps, len(cols)))
     if dm.rank >= needed:

@@ -1,7 +1,7 @@
 """Shared steps of the rules on the manifest's variable lists (AlgebraicVariables, Residuals).
 
-Each list entry (a :class:`~conformance.manifest.VrRef` or a Residual
-:class:`~conformance.unknowns.Unknown`) names a variable by value reference. The rules on a list
+Each list entry (a :class:`~conformance.model.manifest.VrRef` or a Residual
+:class:`~conformance.model.unknowns.Unknown`) names a variable by value reference. The rules on a list
 partition its faults: unresolved entries, repeated entries, then one class of problem per
 variable. The steps they share live here, so both families resolve and classify alike.
 """
@@ -11,10 +11,10 @@ from itertools import compress
 from operator import attrgetter
 from typing import Callable, Iterator, NamedTuple, Sequence, TypeVar
 
-from ..context import CheckContext
-from ..manifest import VrRef
-from ..model import Variable
-from ..unknowns import Unknown
+from .context import CheckContext
+from ..model.manifest import VrRef
+from ..model.description import Variable
+from ..model.unknowns import Unknown
 
 Entry = TypeVar("Entry", VrRef, Unknown)
 Classes = dict[str | None, list[tuple[Entry, Variable]]]

@@ -14,11 +14,11 @@ from itertools import chain
 from operator import attrgetter
 from typing import Iterator
 
-from ..context import Check, CheckContext
-from ..drafts.detect import FORMULATION, LS_DAE_ROOT
-from ..findings import Location, Violation, evidence
-from ..model import FLOAT_TYPES, ModelDescription, Variable
-from ..unknowns import Unknown
+from .context import Check, CheckContext
+from ..model.drafts.detect import FORMULATION, LS_DAE_ROOT
+from ..report.findings import Location, Violation, evidence
+from ..model.description import FLOAT_TYPES, ModelDescription, Variable
+from ..model.unknowns import Unknown
 from .dae_roles import DaeRoles, describe, roles_of
 
 log = logging.getLogger(__name__)

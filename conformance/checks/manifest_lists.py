@@ -11,10 +11,10 @@ from __future__ import annotations
 from collections.abc import Iterator, Sequence
 from operator import attrgetter
 
-from ..context import Check, CheckContext
-from ..findings import Location, Violation, evidence
-from ..model import ModelDescription
-from ..unknowns import Unknown
+from .context import Check, CheckContext
+from ..report.findings import Location, Violation, evidence
+from ..model.description import ModelDescription
+from ..model.unknowns import Unknown
 from .dae_roles import describe, roles_of
 from .model_analysis import analyse
 

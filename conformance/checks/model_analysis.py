@@ -12,10 +12,10 @@ import weakref
 from operator import attrgetter
 from typing import Optional
 
-from ..context import CheckContext
-from ..findings import Location
-from ..model import FLOAT_TYPES, ModelDescription, Variable, VariableDetails
-from ..unknowns import Unknown
+from .context import CheckContext
+from ..report.findings import Location
+from ..model.description import FLOAT_TYPES, ModelDescription, Variable, VariableDetails
+from ..model.unknowns import Unknown
 
 CAUSALITIES = frozenset({"structuralParameter", "parameter", "calculatedParameter", "input",
                          "output", "local", "independent"})

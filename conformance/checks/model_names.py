@@ -6,7 +6,7 @@ no such characters). XML turns a literal tab or line break in an attribute into 
 characters only arrive as character references (``&#9;``, ``&#10;``, ``&#13;``); they still reach
 the importer, which then shows or writes a name that breaks its lines and tables. Under
 ``variableNamingConvention="structured"`` every name must also follow the grammar of
-:mod:`conformance.structured_names`. A name with a forbidden character is reported by
+:mod:`conformance.model.structured_names`. A name with a forbidden character is reported by
 ``variable-name-invalid`` only, not again as a structured-name fault.
 
 Cost: one search over all names joined for the forbidden characters, and one compiled regular
@@ -17,10 +17,10 @@ from __future__ import annotations
 from collections.abc import Iterator
 from operator import attrgetter
 
-from ..context import Check, CheckContext
-from ..findings import Location, Violation, evidence
-from ..model import ModelDescription, Variable
-from ..structured_names import all_structured, is_structured_name, name_problem
+from .context import Check, CheckContext
+from ..report.findings import Location, Violation, evidence
+from ..model.description import ModelDescription, Variable
+from ..model.structured_names import all_structured, is_structured_name, name_problem
 from .model_analysis import analyse
 
 _FORBIDDEN = {"\r": "carriage return (U+000D)", "\n": "line feed (U+000A)",

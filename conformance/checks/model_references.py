@@ -17,9 +17,9 @@ from __future__ import annotations
 from collections.abc import Iterator
 from operator import attrgetter
 
-from ..context import Check, CheckContext
-from ..findings import Location, Violation, evidence
-from ..model import Dimension, ModelDescription, Variable
+from .context import Check, CheckContext
+from ..report.findings import Location, Violation, evidence
+from ..model.description import Dimension, ModelDescription, Variable
 from .model_analysis import analyse, enable_vrs, unknown_loc, var_loc
 
 

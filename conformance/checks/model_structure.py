@@ -13,10 +13,10 @@ from functools import partial
 from itertools import chain
 from operator import attrgetter, is_not, itemgetter
 
-from ..context import Check, CheckContext
-from ..findings import Location, Violation, evidence
-from ..model import ModelDescription, Variable
-from ..unknowns import Unknown
+from .context import Check, CheckContext
+from ..report.findings import Location, Violation, evidence
+from ..model.description import ModelDescription, Variable
+from ..model.unknowns import Unknown
 from .model_analysis import analyse, unknown_loc, var_loc
 
 

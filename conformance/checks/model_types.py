@@ -17,10 +17,10 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 
-from ..context import Check, CheckContext
-from ..definitions import TypeDefinition, UnitDefinition
-from ..findings import Location, Violation, evidence
-from ..model import ModelDescription, Variable
+from .context import Check, CheckContext
+from ..model.definitions import TypeDefinition, UnitDefinition
+from ..report.findings import Location, Violation, evidence
+from ..model.description import ModelDescription, Variable
 from .model_analysis import analyse, var_loc
 
 _SHOWN = 8  # defined names listed in the evidence

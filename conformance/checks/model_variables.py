@@ -17,10 +17,10 @@ from __future__ import annotations
 from operator import attrgetter
 from typing import Iterator
 
-from ..context import Check, CheckContext
-from ..findings import Location, Violation, evidence
-from ..model import FLOAT_TYPES, Variable
-from ..unknowns import Unknown
+from .context import Check, CheckContext
+from ..report.findings import Location, Violation, evidence
+from ..model.description import FLOAT_TYPES, Variable
+from ..model.unknowns import Unknown
 from .model_analysis import (
     ALLOWED_VARIABILITY,
     allowed_initial,

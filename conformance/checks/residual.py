@@ -10,7 +10,7 @@ Every faulty Residual is reported by exactly one rule: unresolved entries only a
 repeats only as repeats, a variable that is also an algebraic variable only by the algebraic
 rules (algebraic-is-residual and the rest), and otherwise type and variability before role.
 Legacy ``<Residual><Formulation/>...</Residual>`` elements arrive here as one Residual each
-(see conformance/manifest.py), so a higher-index constraint counts once.
+(see conformance/model/manifest.py), so a higher-index constraint counts once.
 """
 from __future__ import annotations
 
@@ -19,10 +19,10 @@ from collections.abc import Iterator, Sequence
 from itertools import repeat
 from operator import attrgetter, is_not
 
-from ..context import Check, CheckContext
-from ..findings import Location, Violation, evidence
-from ..model import FLOAT_TYPES, Variable
-from ..unknowns import Unknown
+from .context import Check, CheckContext
+from ..report.findings import Location, Violation, evidence
+from ..model.description import FLOAT_TYPES, Variable
+from ..model.unknowns import Unknown
 from .algebraic import element_count, states_of
 from .dae_form import fully_implicit
 from .listing import (

@@ -15,8 +15,8 @@ from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..archive_base import TOO_LARGE, UNREADABLE, UNSAFE_PATH
-from ..findings import Finding, FmuReport
+from ..intake.archive.base import TOO_LARGE, UNREADABLE, UNSAFE_PATH
+from ..report.findings import Finding, FmuReport
 from .archive import Package, PackageError
 from .change import Change, NoFix
 from .edits import EditConflict, apply_edits, by_file

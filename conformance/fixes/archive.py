@@ -18,7 +18,7 @@ import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ..archive_base import ArchiveLimits, is_within
+from ..intake.archive.base import ArchiveLimits, is_within
 
 _LOCAL_HEADER = 30
 _DATA_DESCRIPTOR = 0x08

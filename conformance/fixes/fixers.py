@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 
-from ..findings import Finding
+from ..report.findings import Finding
 from .archive import Package
 from .change import Change
 from .edits import Edit

@@ -1,7 +1,7 @@
 """The three fmi-ls: header fields of the manifest root, as edits of its start tag."""
 from __future__ import annotations
 
-from ..drafts.detect import ALPHA1_DESCRIPTION, ALPHA1_NAME, ALPHA1_VERSION, LS_NAMESPACE
+from ..model.drafts.detect import ALPHA1_DESCRIPTION, ALPHA1_NAME, ALPHA1_VERSION, LS_NAMESPACE
 from .change import NoFix
 from .edits import Edit
 from .xmltext import StartTag, escape

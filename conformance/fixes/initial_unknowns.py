@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-from ..findings import Finding
+from ..report.findings import Finding
 from .archive import Package
 from .change import Change, NoFix
 from .edits import Edit

@@ -1,6 +1,6 @@
 """legacy-draft-shape: the migration to 1.0.0-alpha.1 as byte edits on the manifest as written.
 
-The steps are the ones :mod:`conformance.drafts.migrate` prints as hints, done: rename the root to
+The steps are the ones :mod:`conformance.model.drafts.migrate` prints as hints, done: rename the root to
 ``fmiDAEManifest`` and drop the default namespace (and an element prefix bound to the
 layered-standard namespace), ``EnableDAE`` -> ``EnableDAEParameter``, a numeric
 ``enableDAEModeVariable`` (a value reference, or a variable name looked up in
@@ -16,11 +16,11 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-from ..drafts.detect import ATTRIBUTES_ONLY, LEGACY_DRAFTS, LS_NAMESPACE
-from ..drafts.migrate import MODEL_STRUCTURE_ORDER
-from ..findings import Finding
-from ..model import MODEL_DESCRIPTION
-from ..xmlsafe import parse_xml
+from ..model.drafts.detect import ATTRIBUTES_ONLY, LEGACY_DRAFTS, LS_NAMESPACE
+from ..model.drafts.migrate import MODEL_STRUCTURE_ORDER
+from ..report.findings import Finding
+from ..model.description import MODEL_DESCRIPTION
+from ..intake.xmlsafe import parse_xml
 from .archive import Package
 from .change import Change, NoFix
 from .edits import Edit, apply_edits

@@ -11,7 +11,7 @@ from __future__ import annotations
 import bisect
 from collections.abc import Sequence
 
-from ..findings import Finding
+from ..report.findings import Finding
 from .archive import Package
 from .change import Change
 from .edits import Edit

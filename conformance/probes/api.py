@@ -2,7 +2,7 @@
 
 A probe is a plain function, registered by rule code like the static checks, that runs INSIDE the
 worker process (the only process that ever loads the FMU's binary) and yields
-:class:`~conformance.findings.Violation` objects. It never decides code or severity.
+:class:`~conformance.report.findings.Violation` objects. It never decides code or severity.
 
     def initial_residual_nonzero(ctx: ProbeContext, *, rtol: float = 1e-6, atol: float = 1e-10
                                  ) -> Iterator[Violation]: ...
@@ -23,9 +23,9 @@ from typing import Any, Callable, Iterable, Mapping, Sequence
 
 import numpy as np
 
-from ..findings import Violation
-from ..manifest import Manifest
-from ..model import ModelDescription
+from ..report.findings import Violation
+from ..model.manifest import Manifest
+from ..model.description import ModelDescription
 from ..runtime.errors import FmiError, Unavailable
 from ..runtime.point import Evaluator, Point
 

@@ -20,7 +20,7 @@ from typing import Iterator
 
 import numpy as np
 
-from ..findings import Violation, evidence
+from ..report.findings import Violation, evidence
 from .api import FmiError, Point, ProbeContext
 from .common import (
     close,

@@ -11,8 +11,8 @@ from typing import Any, Iterator, Sequence
 
 import numpy as np
 
-from ..findings import Location
-from ..model import MODEL_DESCRIPTION
+from ..report.findings import Location
+from ..model.description import MODEL_DESCRIPTION
 from .api import FmiError, ProbeContext, ProbeSkipped
 from ..runtime.instance import Instance
 from ..runtime.layout import Layout

@@ -23,7 +23,7 @@ import os
 import time
 from typing import Any
 
-from ..findings import Location, Violation, evidence
+from ..report.findings import Location, Violation, evidence
 from ..runtime.callrecord import CallCounts, CallRecord
 from ..runtime.supervisor import WorkerProcess
 from .registry import ENDURANCE as COUNTED

@@ -24,7 +24,7 @@ from typing import Iterator
 
 import numpy as np
 
-from ..findings import Violation, evidence
+from ..report.findings import Violation, evidence
 from .api import FmiError, ProbeContext, ProbeSkipped
 from .entry_comparison import (
     OPTIONS_FACT,

@@ -18,7 +18,7 @@ from typing import Any, Iterator
 
 import numpy as np
 
-from ..findings import Violation, evidence
+from ..report.findings import Violation, evidence
 from ..numerics import numdiff
 from ..numerics.conditioning import conditioning
 from .api import ProbeContext, ProbeSkipped
@@ -132,7 +132,7 @@ def _condition(b: _Block, *, dense_up_to: int, seed: int) -> _Judged:
     if n > dense_up_to:
         import scipy.sparse as sp  # scipy: only for a dg/dw too large for a dense SVD
 
-        from ..matching import maximum_matching  # scipy's csgraph: as above
+        from ..numerics.graphs.matching import maximum_matching  # scipy's csgraph: as above
 
         nonzero = sp.csr_array(g)
         nonzero.eliminate_zeros()   # stored: an edge (an entry measured as exactly 0 is none)

@@ -27,8 +27,8 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
-from ..catalogue import RuleSpec
-from ..findings import Location, Violation, evidence
+from ..report.catalogue import RuleSpec
+from ..report.findings import Location, Violation, evidence
 from ..runtime.callrecord import CallRecord
 from ..runtime.protocol import Job, violation_from_json
 from ..runtime.supervisor import WorkerProcess

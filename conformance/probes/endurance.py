@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from ..findings import Violation, evidence
+from ..report.findings import Violation, evidence
 from ..numerics.growth import growth
 from ..runtime.instance import Instance
 from ..runtime.layout import Layout

@@ -32,7 +32,7 @@ from typing import Any
 
 import numpy as np
 
-from ..catalogue import default_catalogue
+from ..report.catalogue import default_catalogue
 from ..runtime.child import memory_info
 from ..runtime.instance import Instance
 from ..runtime.layout import Layout

@@ -18,8 +18,8 @@ from typing import Iterator, Mapping
 
 import numpy as np
 
-from ..catalogue import default_catalogue
-from ..findings import Violation, evidence
+from ..report.catalogue import default_catalogue
+from ..report.findings import Violation, evidence
 from ..numerics import measure
 from .api import ProbeContext
 from .jacobian import PointSurvey, Survey, point_evidence, row_scale

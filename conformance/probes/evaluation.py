@@ -12,7 +12,7 @@ from typing import Any, Iterator
 
 import numpy as np
 
-from ..findings import Location, Violation, evidence
+from ..report.findings import Location, Violation, evidence
 from .api import FmiError, Point, ProbeContext, ProbeSkipped
 from .common import (
     dae_of,

@@ -23,10 +23,10 @@ from typing import Any, Callable, Iterator, Sequence
 
 import numpy as np
 
-from ..findings import Location, Violation, evidence
+from ..report.findings import Location, Violation, evidence
 from ..runtime.instance import Instance, PointNotSet
 from ..runtime.layout import Layout
-from ..unknowns import Unknown
+from ..model.unknowns import Unknown
 from .api import EVENT_INDICATOR_FAULT, FmiError, Point, ProbeContext, ProbeSkipped
 from .common import close, dae_of, error_evidence, layout_of, root_location, var_location
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from typing import Any, Iterator
 
-from ..findings import Location, Violation, evidence
+from ..report.findings import Location, Violation, evidence
 from .api import FmiError, ProbeContext, ProbeSkipped
 from .common import (close, error_evidence, layout_of, manifest_location, new_instance,
                      var_location)

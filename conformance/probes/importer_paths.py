@@ -21,7 +21,7 @@ from typing import Iterator
 
 import numpy as np
 
-from ..findings import Violation, evidence
+from ..report.findings import Violation, evidence
 from ..runtime.instance import Instance
 from .api import FmiError, Point, ProbeContext, ProbeSkipped
 from .common import (

@@ -20,9 +20,9 @@ from __future__ import annotations
 import math
 
 
-from ..attributes import declared_nominal
-from ..findings import Location
-from ..model import ModelDescription, Unknown, Variable
+from ..model.attributes import declared_nominal
+from ..report.findings import Location
+from ..model.description import ModelDescription, Unknown, Variable
 from ..runtime.layout import Layout
 from .api import ProbeContext
 from .jacobian_layout import Column, JacobianLayout, Row, with_pattern

@@ -25,7 +25,7 @@ from typing import Any
 
 import numpy as np
 
-from ..catalogue import default_catalogue
+from ..report.catalogue import default_catalogue
 from ..numerics import colouring as col
 from ..numerics import measure, numdiff
 from ..runtime.layout import Layout

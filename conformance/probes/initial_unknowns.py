@@ -26,7 +26,7 @@ from collections.abc import Iterator
 
 import numpy as np
 
-from ..findings import Violation, evidence
+from ..report.findings import Violation, evidence
 from .api import ProbeContext, ProbeSkipped
 from .entry_comparison import (
     entry_violations,

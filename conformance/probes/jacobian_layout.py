@@ -11,9 +11,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..attributes import declared_nominal, usable_bounds, usable_nominal
-from ..findings import Location
-from ..model import ModelDescription, Unknown, Variable
+from ..model.attributes import declared_nominal, usable_bounds, usable_nominal
+from ..report.findings import Location
+from ..model.description import ModelDescription, Unknown, Variable
 from ..numerics import colouring as col
 from .api import ProbeContext
 

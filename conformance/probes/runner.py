@@ -40,10 +40,10 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Iterable, Sequence
 
-from ..catalogue import RuleSpec, default_catalogue
-from ..findings import Violation
-from ..layer import NOT_A_DAE_FMU
-from ..manifest import MANIFEST
+from ..report.catalogue import RuleSpec, default_catalogue
+from ..report.findings import Violation
+from ..model.layer import NOT_A_DAE_FMU
+from ..model.manifest import MANIFEST
 from ..runtime.host import host_platform_tuple, library_extension
 from .driver import RUNNER_RULES, Driver
 from .registry import ENDURANCE, FAMILY_OF

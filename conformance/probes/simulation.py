@@ -31,7 +31,7 @@ import dataclasses
 import logging
 from typing import Any, Iterator
 
-from ..findings import Location, Violation, evidence
+from ..report.findings import Location, Violation, evidence
 from ..numerics import settings as st
 from ..numerics.compare import compare
 from ..numerics.settings import Settings, Trajectory

@@ -13,8 +13,8 @@ from typing import Any
 
 import numpy as np
 
-from ..catalogue import default_catalogue
-from ..findings import evidence
+from ..report.catalogue import default_catalogue
+from ..report.findings import evidence
 from ..numerics import settings as st
 from ..numerics.compare import compare
 from ..numerics.settings import Settings, Trajectory

@@ -31,7 +31,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from ..findings import Location, Violation, evidence
+from ..report.findings import Location, Violation, evidence
 from ..runtime.callrecord import CallRecord
 from ..runtime.child import memory_info, reset_peak_memory
 from ..runtime.layout import Layout

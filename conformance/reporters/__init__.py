@@ -1,7 +1,7 @@
 """Reporters: one module per output format, each ``render(report, catalogue, **kw) -> str``.
 
-Reporters see only the frozen :class:`~conformance.findings.Report`, the catalogue and the
-:class:`~conformance.findings.RunInfo`, never the engine. ``REPORTER_BY_NAME`` is the one place
+Reporters see only the frozen :class:`~conformance.report.findings.Report`, the catalogue and the
+:class:`~conformance.report.findings.RunInfo`, never the engine. ``REPORTER_BY_NAME`` is the one place
 formats are registered; docs/formats.md describes them.
 
 A format's module is imported when its renderer is first looked up, so a run that writes JSON

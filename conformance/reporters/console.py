@@ -1,9 +1,9 @@
 """Console output in the style of compiler diagnostics, coloured only when asked to."""
 from __future__ import annotations
 
-from ..catalogue import Catalogue
-from ..drafts.names import DRAFT_LABELS
-from ..findings import Finding, FmuReport, Report, Severity, thaw
+from ..report.catalogue import Catalogue
+from ..model.drafts.names import DRAFT_LABELS
+from ..report.findings import Finding, FmuReport, Report, Severity, thaw
 
 _COLOURS = {Severity.ERROR: "\033[1;31m", Severity.WARNING: "\033[1;33m",
             Severity.INFO: "\033[1;36m"}

@@ -15,8 +15,8 @@ from __future__ import annotations
 import os
 from typing import Any, Mapping
 
-from ..catalogue import Catalogue
-from ..findings import Finding, FmuReport, Report, RunInfo, Severity
+from ..report.catalogue import Catalogue
+from ..report.findings import Finding, FmuReport, Report, RunInfo, Severity
 from .markdown import plural
 from .sarif import annotated_file, inner_location, is_baselined
 

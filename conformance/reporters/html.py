@@ -14,9 +14,9 @@ import logging
 from html import escape
 from typing import Any, Iterable
 
-from ..catalogue import Catalogue
-from ..drafts.names import DRAFT_LABELS
-from ..findings import Finding, FmuReport, Report, RunInfo, Severity, thaw
+from ..report.catalogue import Catalogue
+from ..model.drafts.names import DRAFT_LABELS
+from ..report.findings import Finding, FmuReport, Report, RunInfo, Severity, thaw
 from . import html_plots
 
 log = logging.getLogger(__name__)

@@ -5,9 +5,9 @@ import json
 import math
 from typing import Any
 
-from ..catalogue import Catalogue, default_catalogue
-from ..drafts.names import DRAFT_LABELS
-from ..findings import Finding, FmuReport, Report, Severity, thaw
+from ..report.catalogue import Catalogue, default_catalogue
+from ..model.drafts.names import DRAFT_LABELS
+from ..report.findings import Finding, FmuReport, Report, Severity, thaw
 
 SCHEMA_VERSION = 1
 

@@ -11,7 +11,7 @@ Rules that did not apply (no manifest, no binary, ``--no-probes``, another draft
 
 The attributes are those the strict Ant schema, Jenkins and GitLab require; our own XSD in
 ``tests/reporters/schemas/junit.xsd`` describes the result. Only ``time`` and ``timestamp``
-(from :class:`~conformance.findings.RunInfo`) change between two runs on the same input.
+(from :class:`~conformance.report.findings.RunInfo`) change between two runs on the same input.
 """
 from __future__ import annotations
 
@@ -22,9 +22,9 @@ from dataclasses import dataclass
 from datetime import datetime, timezone
 from typing import Any
 
-from ..catalogue import Catalogue
-from ..drafts.names import DRAFT_LABELS
-from ..findings import Finding, FmuReport, Report, RunInfo, Severity
+from ..report.catalogue import Catalogue
+from ..model.drafts.names import DRAFT_LABELS
+from ..report.findings import Finding, FmuReport, Report, RunInfo, Severity
 from .markdown import plural
 from .sarif import is_baselined
 

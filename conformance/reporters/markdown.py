@@ -12,9 +12,9 @@ from __future__ import annotations
 import re
 from typing import Any
 
-from ..catalogue import Catalogue
-from ..drafts.names import DRAFT_LABELS
-from ..findings import Finding, FmuReport, Report, RunInfo, Severity
+from ..report.catalogue import Catalogue
+from ..model.drafts.names import DRAFT_LABELS
+from ..report.findings import Finding, FmuReport, Report, RunInfo, Severity
 from .sarif import inner_location, is_baselined
 from .sarif_rules import RULES_DOC_URL, rule_url
 

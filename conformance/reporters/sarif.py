@@ -20,8 +20,8 @@ from pathlib import Path, PurePosixPath
 from typing import Any
 from urllib.parse import quote
 
-from ..catalogue import Catalogue
-from ..findings import Finding, FmuReport, Report, Severity
+from ..report.catalogue import Catalogue
+from ..report.findings import Finding, FmuReport, Report, Severity
 from .json_report import plain
 from .sarif_rules import LEVEL, PROJECT_URL, RULES_DOC_URL, descriptors, rule_url
 
@@ -31,7 +31,7 @@ __all__ = ["RULES_DOC_URL", "annotated_file", "inner_location", "is_baselined", 
 SCHEMA_URI = "https://json.schemastore.org/sarif-2.1.0.json"
 SARIF_VERSION = "2.1.0"
 _SRCROOT = "%SRCROOT%"
-#: The evidence key a baseline sets on the findings it accepts (conformance/baseline.py).
+#: The evidence key a baseline sets on the findings it accepts (conformance/report/baseline.py).
 BASELINED = "baselined"
 _FINGERPRINT = "lsdae/v1"
 

@@ -5,8 +5,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from ..catalogue import Catalogue, RuleSpec
-from ..findings import Finding, Report, Severity
+from ..report.catalogue import Catalogue, RuleSpec
+from ..report.findings import Finding, Report, Severity
 
 #: Where the rule documentation is published (docs/rules.md, generated from the catalogue).
 PROJECT_URL = "https://github.com/lsdae/lsdae"

@@ -8,9 +8,9 @@ import math
 from dataclasses import dataclass, field
 from typing import Any, Mapping, Sequence
 
-from ..attributes import start_flagged, usable_bounds, usable_nominal, usable_start
-from ..manifest import Manifest
-from ..model import FLOAT_TYPES, ModelDescription, Variable
+from ..model.attributes import start_flagged, usable_bounds, usable_nominal, usable_start
+from ..model.manifest import Manifest
+from ..model.description import FLOAT_TYPES, ModelDescription, Variable
 
 
 def _scalar_float64(var: Variable | None) -> bool:
@@ -114,7 +114,7 @@ class Layout:
                 continue
             names.setdefault(var.vr, var.name)
             if var.type in FLOAT_TYPES:
-                # what the static stage flags (conformance.attributes) is never sampled from
+                # what the static stage flags (conformance.model.attributes) is never sampled from
                 nominal[var.vr] = usable_nominal(var.nominal)
                 bounds[var.vr] = usable_bounds(var.minimum, var.maximum)
                 if var.start is not None:

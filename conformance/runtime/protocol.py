@@ -11,7 +11,7 @@ import sys
 from dataclasses import dataclass, field
 from typing import Any
 
-from ..findings import Location, Violation
+from ..report.findings import Location, Violation
 
 MEMORY_EXIT = 86           # the child's exit status after a MemoryError in Python
 

@@ -11,7 +11,7 @@ The integrators, their settings and limits, and the comparison of two runs are p
 binary. The
 simulation probes (``conformance.probes.simulation``) call
 :func:`~conformance.simulate.integrate.simulate_instance` inside the worker process; the
-``lsdae simulate`` command (``conformance.simulate_command``) runs those probes through the
+``lsdae simulate`` command (``conformance.commands.simulate``) runs those probes through the
 engine and reads the trajectories back from the report. Nothing is imported at package import,
 so the command line stays quick to start.
 """

@@ -5,9 +5,9 @@ import pytest
 from lxml import etree
 
 from conformance.checks import REGISTRY, algebraic, residual
-from conformance.context import CheckContext
-from conformance.manifest import read_manifest
-from conformance.model import read_model_description
+from conformance.checks.context import CheckContext
+from conformance.model.manifest import read_manifest
+from conformance.model.description import read_model_description
 
 # The HelloWorldDAE model of draft-shapes.md, plus a few extra variables to point at.
 VARIABLES = """

@@ -5,9 +5,9 @@ import re
 
 import pytest
 
-from conformance.catalogue import default_catalogue
+from conformance.report.catalogue import default_catalogue
 from conformance.checks import REGISTRY
-from conformance.rules_command import explain_text
+from conformance.commands.explain import explain_text
 from tests.fixturekit import FIXTURES
 
 CATALOGUE = default_catalogue()
@@ -50,7 +50,7 @@ def test_rule_has_failing_and_passing_fixture(rule):
 def test_rule_docs_are_current():
     from pathlib import Path
 
-    from conformance.ruledocs import render_markdown
+    from conformance.commands.ruledocs import render_markdown
 
     docs = Path(__file__).resolve().parents[2] / "docs" / "rules.md"
     assert docs.read_text(encoding="utf-8") == render_markdown(CATALOGUE), (

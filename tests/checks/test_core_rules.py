@@ -7,9 +7,9 @@ import pytest
 from lxml import etree
 
 from conformance.checks import model_structure, model_variables
-from conformance.context import CheckContext
-from conformance.manifest import read_manifest
-from conformance.model import read_model_description
+from conformance.checks.context import CheckContext
+from conformance.model.manifest import read_manifest
+from conformance.model.description import read_model_description
 
 # HelloWorldDAE-like: time 0, dae 1, x 2, der(x) 3, y 4, z 5, g1 6, g2 7, plus an output v 8.
 VARIABLES = """

@@ -5,12 +5,12 @@ import dataclasses
 
 import pytest
 
-from conformance import engine
-from conformance.catalogue import Catalogue, default_catalogue
+from conformance.run import engine
+from conformance.report.catalogue import Catalogue, default_catalogue
 from conformance.checks import REGISTRY
-from conformance.engine import EngineOptions, check_fmu
-from conformance.findings import Severity, Violation
-from conformance.layer import NOT_A_DAE_FMU
+from conformance.run.engine import EngineOptions, check_fmu
+from conformance.report.findings import Severity, Violation
+from conformance.model.layer import NOT_A_DAE_FMU
 from tests.fixturekit import Case, materialise, zip_scene
 
 
@@ -129,13 +129,13 @@ def test_a_file_left_out_by_an_archive_limit_is_not_read_not_missing(tmp_path):
 def test_a_reader_that_fails_never_calls_a_present_manifest_absent(tmp_path, monkeypatch):
     """When lsdae itself fails before the manifest is read, the summary says the manifest is
     there and not checked, and the console never says "no fmi-ls-dae manifest"."""
-    from conformance.findings import Report
+    from conformance.report.findings import Report
     from conformance.reporters import console
 
     def broken(*_args, **_kwargs):
         raise RecursionError("deep")
 
-    from conformance import reading
+    from conformance.run import reading
 
     monkeypatch.setattr(reading, "detect_draft", broken)  # fails before the draft is known
     report = check_fmu(_scene(tmp_path), options=EngineOptions(probes=False))
@@ -148,7 +148,7 @@ def test_a_reader_that_fails_never_calls_a_present_manifest_absent(tmp_path, mon
 def test_an_fmi2_fmu_is_one_warning_and_not_checked(tmp_path, capsys):
     """An FMI 2.0 FMU: fmi-version-unsupported once, no schema noise, every other rule skipped
     with the reason, exit 0 under the default --fail-on, and "not checked" in the summary."""
-    from conformance.cli import main
+    from conformance.commands.cli import main
     from tests.fixturekit import all_cases
 
     case = next(c for c in all_cases() if c.id == "DAE092/fail")

@@ -3,8 +3,8 @@ from __future__ import annotations
 
 import pytest
 
-from conformance.engine import EngineOptions, check_fmu
-from conformance.findings import Severity
+from conformance.run.engine import EngineOptions, check_fmu
+from conformance.report.findings import Severity
 from tests.fixturekit import Case, all_cases, materialise
 
 CASES = all_cases()

@@ -28,9 +28,9 @@ from pathlib import Path
 import pytest
 from fmpy.validation import validate_fmu
 
-from conformance.engine import EngineOptions, check_fmu
-from conformance.manifest import MANIFEST
-from conformance.model import MODEL_DESCRIPTION
+from conformance.run.engine import EngineOptions, check_fmu
+from conformance.model.manifest import MANIFEST
+from conformance.model.description import MODEL_DESCRIPTION
 from tests.fixturekit import scene_xml
 
 # fmpy's message pattern -> the lsdae rules that cover that problem class (any one suffices).

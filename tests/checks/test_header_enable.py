@@ -5,9 +5,9 @@ import pytest
 from lxml import etree
 
 from conformance.checks import enable, header
-from conformance.context import CheckContext
-from conformance.manifest import MANIFEST, read_manifest
-from conformance.model import read_model_description
+from conformance.checks.context import CheckContext
+from conformance.model.manifest import MANIFEST, read_manifest
+from conformance.model.description import read_model_description
 
 NS = 'xmlns:fmi-ls="http://fmi-standard.org/fmi-ls-manifest"'
 NAME = 'fmi-ls:fmi-ls-name="org.fmi-standard.fmi-ls-dae"'
@@ -74,7 +74,7 @@ def test_codes_are_in_our_ranges():
 
 
 def test_catalogue_names_match_functions():
-    from conformance.catalogue import load_catalogue
+    from conformance.report.catalogue import load_catalogue
     cat = load_catalogue()
     for code, fn in {**header.CHECKS, **enable.CHECKS}.items():
         assert cat[code].name.replace("-", "_") == fn.__name__

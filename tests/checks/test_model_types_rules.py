@@ -11,9 +11,9 @@ import pytest
 from lxml import etree
 
 from conformance.checks import model_names, model_references, model_types
-from conformance.context import CheckContext
-from conformance.manifest import read_manifest
-from conformance.model import read_model_description
+from conformance.checks.context import CheckContext
+from conformance.model.manifest import read_manifest
+from conformance.model.description import read_model_description
 
 CHECKS = {**model_types.CHECKS, **model_names.CHECKS, **model_references.CHECKS}
 

@@ -15,7 +15,7 @@ from typing import Any
 
 import pytest
 
-from conformance.catalogue import default_catalogue
+from conformance.report.catalogue import default_catalogue
 from conformance.checks import REGISTRY
 from conformance.numerics.settings import Settings
 from conformance.probes.registry import PROBES

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import pytest
 
-from conformance.engine import EngineOptions, check_fmu
+from conformance.run.engine import EngineOptions, check_fmu
 from scenes.build import build_scene, scene_names
 
 

@@ -6,12 +6,12 @@ import pytest
 from lxml import etree
 
 from bench.generate import manifest_xml, model_description_xml
-from conformance.catalogue import default_catalogue
+from conformance.report.catalogue import default_catalogue
 from conformance.checks import REGISTRY, index1, manifest_dependencies, manifest_lists
-from conformance.context import CheckContext
-from conformance.manifest import MANIFEST, Manifest, VrRef, read_manifest
-from conformance.model import ModelDescription, Variable, read_model_description
-from conformance.unknowns import Unknown
+from conformance.checks.context import CheckContext
+from conformance.model.manifest import MANIFEST, Manifest, VrRef, read_manifest
+from conformance.model.description import ModelDescription, Variable, read_model_description
+from conformance.model.unknowns import Unknown
 
 # The HelloWorldDAE model of draft-shapes.md plus variables of every other kind to point at.
 VARIABLES = """

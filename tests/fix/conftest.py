@@ -2,7 +2,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from conformance.engine import EngineOptions, check_fmu
+from conformance.run.engine import EngineOptions, check_fmu
 from conformance.fixes.fixers import FIXERS
 
 STATIC = EngineOptions(probes=False)

@@ -9,9 +9,9 @@ import warnings
 import zipfile
 from pathlib import Path
 
-from conformance.fix_command import fix_fmu
-from conformance.manifest import MANIFEST
-from conformance.model import MODEL_DESCRIPTION
+from conformance.commands.fix import fix_fmu
+from conformance.model.manifest import MANIFEST
+from conformance.model.description import MODEL_DESCRIPTION
 from tests.fix.conftest import STATIC, codes
 from tests.fixturekit import scene_xml
 

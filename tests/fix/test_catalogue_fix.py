@@ -5,10 +5,10 @@ import json
 
 import pytest
 
-from conformance.catalogue import CatalogueError, _rule, default_catalogue
-from conformance.cli import main
-from conformance.engine import check_fmu
-from conformance.findings import Report
+from conformance.report.catalogue import CatalogueError, _rule, default_catalogue
+from conformance.commands.cli import main
+from conformance.run.engine import check_fmu
+from conformance.report.findings import Report
 from conformance.fixes.fixers import UNSAFE_FIXERS
 from conformance.reporters import json_report
 from tests.fix.conftest import FIXABLE, STATIC

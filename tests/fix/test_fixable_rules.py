@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from conformance.fix_command import fix_fmu
+from conformance.commands.fix import fix_fmu
 from conformance.fixes.apply import keys
 from tests.fix.conftest import FIXABLE, STATIC, codes
 from tests.fixturekit import all_cases, materialise

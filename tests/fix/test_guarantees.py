@@ -6,8 +6,8 @@ from pathlib import Path
 
 import pytest
 
-from conformance.cli import main
-from conformance.fix_command import fix_fmu
+from conformance.commands.cli import main
+from conformance.commands.fix import fix_fmu
 from conformance.fixes import fixers
 from conformance.fixes.apply import ALL
 from conformance.fixes.change import Change

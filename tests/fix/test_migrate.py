@@ -7,13 +7,13 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from conformance.drafts.detect import ALPHA1, LEGACY_DRAFTS, LS_NAMESPACE, detect_draft
+from conformance.model.drafts.detect import ALPHA1, LEGACY_DRAFTS, LS_NAMESPACE, detect_draft
 from conformance.fixes.change import NoFix
 from conformance.fixes.edits import apply_edits
 from conformance.fixes.migrate import _Migration
-from conformance.manifest import MANIFEST, read_manifest
-from conformance.schemas import validate_manifest
-from conformance.xmlsafe import parse_xml
+from conformance.model.manifest import MANIFEST, read_manifest
+from conformance.intake.schemas import validate_manifest
+from conformance.intake.xmlsafe import parse_xml
 from tests.fixturekit import scene_xml
 
 DATA = Path(__file__).resolve().parents[1] / "unit" / "data" / "manifests"

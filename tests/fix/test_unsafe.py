@@ -3,10 +3,10 @@ from __future__ import annotations
 
 import pytest
 
-from conformance.cli import main
-from conformance.engine import EngineOptions, check_fmu
-from conformance.findings import Finding, Location, Severity, evidence
-from conformance.fix_command import fix_fmu
+from conformance.commands.cli import main
+from conformance.run.engine import EngineOptions, check_fmu
+from conformance.report.findings import Finding, Location, Severity, evidence
+from conformance.commands.fix import fix_fmu
 from conformance.fixes.apply import keys
 from conformance.fixes.edits import apply_edits
 from conformance.fixes.fixers import UNSAFE_FIXERS

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from conformance.cli import main
+from conformance.commands.cli import main
 from conformance.reporters import REPORTER_BY_NAME
 from scenes.build import build_scene
 from tests.fixturekit import all_cases, materialise

@@ -9,9 +9,9 @@ from pathlib import Path
 
 import pytest
 
-import conformance.parallel as parallel
-from conformance import fleet
-from conformance.result_cache import content_hash
+import conformance.run.parallel as parallel
+from conformance.run import fleet
+from conformance.run.result_cache import content_hash
 from scenes.build import build_scene
 from tests.fleet.conftest import every_format, lsdae, outputs
 
@@ -245,9 +245,9 @@ def test_hits_and_misses_in_parallel_processes_keep_the_input_order(fmus, tmp_pa
 def test_an_interrupted_run_keeps_what_it_checked_and_stores_only_that(fmus, tmp_path):
     from dataclasses import replace
 
-    from conformance.catalogue import default_catalogue
-    from conformance.engine import EngineOptions, check_paths
-    from conformance.fleet import plan
+    from conformance.report.catalogue import default_catalogue
+    from conformance.run.engine import EngineOptions, check_paths
+    from conformance.run.fleet import plan
 
     options, catalogue = EngineOptions(probes=False), default_catalogue()
     cache = tmp_path / "cache"

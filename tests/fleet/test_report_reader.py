@@ -1,4 +1,4 @@
-"""The JSON report read back (conformance/report_reader.py) is the report that was written."""
+"""The JSON report read back (conformance/report/reader.py) is the report that was written."""
 from __future__ import annotations
 
 import json
@@ -6,9 +6,9 @@ from dataclasses import replace
 
 import pytest
 
-from conformance.engine import EngineOptions, check_paths
-from conformance.findings import evidence
-from conformance.report_reader import SCHEMA_VERSION, ReportFormatError, read_report
+from conformance.run.engine import EngineOptions, check_paths
+from conformance.report.findings import evidence
+from conformance.report.reader import SCHEMA_VERSION, ReportFormatError, read_report
 from conformance.reporters import REPORTER_BY_NAME, json_report
 
 

@@ -11,7 +11,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from conformance.sharding import assign, input_names, input_size, parse_shard
+from conformance.run.sharding import assign, input_names, input_size, parse_shard
 from tests.fleet.conftest import lsdae
 
 REPO = Path(__file__).resolve().parents[2]

@@ -6,8 +6,8 @@ from pathlib import Path
 
 import pytest
 
-from conformance.manifest import MANIFEST
-from conformance.model import MODEL_DESCRIPTION
+from conformance.model.manifest import MANIFEST
+from conformance.model.description import MODEL_DESCRIPTION
 from tests.fixturekit import scene_xml
 
 BOOLEAN_DAE = ('<Boolean name="dae" valueReference="1" causality="structuralParameter" '

@@ -5,8 +5,8 @@ import json
 
 import pytest
 
-from conformance.baseline import identity, load
-from conformance.cli import main
+from conformance.report.baseline import identity, load
+from conformance.commands.cli import main
 from tests.integration.conftest import BOOLEAN_DAE, INT_DAE
 
 # A manifest-less FMU has one finding, DAE091, whose severity the tests choose.
@@ -143,7 +143,7 @@ def test_unreadable_baseline_is_a_usage_error(fmu, tmp_path, capsys):
 
 
 def test_identity_prefers_subject_then_path_then_message():
-    from conformance.findings import Finding, Location, Severity
+    from conformance.report.findings import Finding, Location, Severity
     base = Finding("DAE001", "x", Severity.ERROR, "msg", Location("f", 3, path="/a"), (), "s")
     assert identity(base) == "s"
     assert identity(Finding("DAE001", "x", Severity.ERROR, "msg", Location("f", 3, path="/a"))

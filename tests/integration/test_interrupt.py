@@ -12,9 +12,9 @@ from pathlib import Path
 
 import pytest
 
-from conformance.engine import EngineOptions
-from conformance.parallel import check_all, check_one
-from conformance.catalogue import default_catalogue
+from conformance.run.engine import EngineOptions
+from conformance.run.parallel import check_all, check_one
+from conformance.report.catalogue import default_catalogue
 from scenes.build import build_scene
 
 REPO = Path(__file__).resolve().parents[2]

@@ -5,11 +5,11 @@ import io
 
 import pytest
 
-from conformance.catalogue import default_catalogue
-from conformance.cli import main
-from conformance.engine import EngineOptions
-from conformance.parallel import check_all
-from conformance.progress import NoProgress, Progress, make_progress, wanted
+from conformance.report.catalogue import default_catalogue
+from conformance.commands.cli import main
+from conformance.run.engine import EngineOptions
+from conformance.run.parallel import check_all
+from conformance.run.progress import NoProgress, Progress, make_progress, wanted
 from tests.integration import workers
 from tests.integration.conftest import BOOLEAN_DAE, INT_DAE
 

@@ -9,8 +9,8 @@ from pathlib import Path
 
 import pytest
 
-from conformance.cli import main
-from conformance.precommit import fmu_root, fmu_roots
+from conformance.commands.cli import main
+from conformance.commands.precommit import fmu_root, fmu_roots
 from tests.integration.conftest import BOOLEAN_DAE, INT_DAE
 
 REPO = Path(__file__).resolve().parents[2]

@@ -1,4 +1,4 @@
-"""conformance.process_pool on Ctrl-C: the running workers are killed and the pool is wound down
+"""conformance.run.process_pool on Ctrl-C: the running workers are killed and the pool is wound down
 before the interrupt goes on, so that nothing of it is left to race the interpreter's exit."""
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ from concurrent.futures.process import _ExecutorManagerThread
 
 import pytest
 
-from conformance.process_pool import run_pooled
+from conformance.run.process_pool import run_pooled
 
 
 class _InterruptAfterFirst:

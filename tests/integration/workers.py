@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import os
 
-from conformance.parallel import check_one
+from conformance.run.parallel import check_one
 
 
 def crash_on_marked(path, options, catalogue):

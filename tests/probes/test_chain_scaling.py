@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 from lxml import etree
 
-from conformance.manifest import MANIFEST, read_manifest
-from conformance.model import MODEL_DESCRIPTION, read_model_description
+from conformance.model.manifest import MANIFEST, read_manifest
+from conformance.model.description import MODEL_DESCRIPTION, read_model_description
 from conformance.probes.api import Point
 from conformance.runtime.callrecord import CallRecord
 from conformance.runtime.instance import Instance

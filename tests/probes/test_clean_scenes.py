@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import pytest
 
-from conformance.engine import EngineOptions, check_fmu
+from conformance.run.engine import EngineOptions, check_fmu
 from scenes.build import build_scene
 
 SEEDS = range(20)

@@ -5,9 +5,9 @@ import re
 
 import pytest
 
-from conformance.catalogue import default_catalogue
-from conformance.engine import EngineOptions, check_fmu
-from conformance.findings import Severity
+from conformance.report.catalogue import default_catalogue
+from conformance.run.engine import EngineOptions, check_fmu
+from conformance.report.findings import Severity
 from scenes.build import SCENES_DIR
 from tests.fixturekit import FIXTURES
 from tests.fixtures.defects import DEFECTS, Defect, build

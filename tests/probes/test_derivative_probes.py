@@ -14,9 +14,9 @@ import pytest
 from lxml import etree
 from scipy.optimize import fsolve
 
-from conformance.catalogue import default_catalogue
-from conformance.manifest import read_manifest
-from conformance.model import read_model_description
+from conformance.report.catalogue import default_catalogue
+from conformance.model.manifest import read_manifest
+from conformance.model.description import read_model_description
 from conformance.probes import derivatives as D
 from conformance.probes import dgdw
 from conformance.probes.api import FmiError, Point, ProbeContext, ProbeSkipped
@@ -505,7 +505,7 @@ def test_chain_xml_is_the_generators():
 
 @pytest.mark.parametrize("seed", range(20))
 def test_chain_fmu_is_clean_with_probes(seed):
-    from conformance.engine import EngineOptions, check_fmu
+    from conformance.run.engine import EngineOptions, check_fmu
     from scenes.Chain.chain import build_chain
 
     report = check_fmu(build_chain(), options=EngineOptions(probes=True, seed=seed))
@@ -514,7 +514,7 @@ def test_chain_fmu_is_clean_with_probes(seed):
 
 
 def test_larger_chain_fmu_is_clean_and_coloured_with_three_groups():
-    from conformance.engine import EngineOptions, check_fmu
+    from conformance.run.engine import EngineOptions, check_fmu
     from scenes.Chain.chain import build_chain
 
     report = check_fmu(build_chain(40), options=EngineOptions(probes=True))

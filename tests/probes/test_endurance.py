@@ -12,10 +12,10 @@ import json
 import numpy as np
 import pytest
 
-from conformance.catalogue import Catalogue, default_catalogue
-from conformance.cli import main
-from conformance.engine import EngineOptions, check_fmu
-from conformance.findings import Finding, FmuReport, thaw
+from conformance.report.catalogue import Catalogue, default_catalogue
+from conformance.commands.cli import main
+from conformance.run.engine import EngineOptions, check_fmu
+from conformance.report.findings import Finding, FmuReport, thaw
 from conformance.probes import endurance_run
 from conformance.probes.api import Point, ProbeContext, ProbeSkipped
 from conformance.probes.endurance import KINDS, evaluation_fails_late, memory_grows

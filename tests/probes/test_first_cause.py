@@ -15,9 +15,9 @@ import numpy as np
 import pytest
 from lxml import etree
 
-from conformance.catalogue import default_catalogue
-from conformance.manifest import read_manifest
-from conformance.model import read_model_description
+from conformance.report.catalogue import default_catalogue
+from conformance.model.manifest import read_manifest
+from conformance.model.description import read_model_description
 from conformance.probes import basic, evaluation
 from conformance.probes.api import FmiError, Point, ProbeContext, ProbeSkipped
 from conformance.probes.common import renew_failed

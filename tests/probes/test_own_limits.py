@@ -13,8 +13,8 @@ import dataclasses
 
 import pytest
 
-from conformance.catalogue import Catalogue, default_catalogue
-from conformance.engine import EngineOptions, check_fmu
+from conformance.report.catalogue import Catalogue, default_catalogue
+from conformance.run.engine import EngineOptions, check_fmu
 from conformance.probes import driver
 from scenes.Chain import chain
 from scenes.build import build_scene

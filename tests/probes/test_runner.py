@@ -9,10 +9,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from conformance.catalogue import Catalogue, default_catalogue
-from conformance.engine import EngineOptions, check_fmu, check_paths
-from conformance.findings import Severity
-from conformance.manifest import MANIFEST
+from conformance.report.catalogue import Catalogue, default_catalogue
+from conformance.run.engine import EngineOptions, check_fmu, check_paths
+from conformance.report.findings import Severity
+from conformance.model.manifest import MANIFEST
 from conformance.probes import driver, registry, runner
 from conformance.probes.api import Point
 from conformance.probes.registry import PROBES

@@ -15,9 +15,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from conformance.catalogue import default_catalogue
-from conformance.engine import EngineOptions, check_fmu
-from conformance.findings import thaw
+from conformance.report.catalogue import default_catalogue
+from conformance.run.engine import EngineOptions, check_fmu
+from conformance.report.findings import thaw
 from conformance.numerics import colouring as col
 from conformance.numerics import measure
 from conformance.numerics.floors import TINY

@@ -8,8 +8,8 @@ from __future__ import annotations
 
 import pytest
 
-from conformance.engine import EngineOptions, check_fmu
-from conformance.findings import Severity
+from conformance.run.engine import EngineOptions, check_fmu
+from conformance.report.findings import Severity
 from tests.fixtures.defects.variants import variant
 
 X = ('<Float64 name="x1" valueReference="1" causality="local" variability="continuous" '

@@ -15,9 +15,9 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from conformance.catalogue import Catalogue, RuleSpec, default_catalogue
-from conformance.engine import EngineOptions, check_fmu
-from conformance.findings import (
+from conformance.report.catalogue import Catalogue, RuleSpec, default_catalogue
+from conformance.run.engine import EngineOptions, check_fmu
+from conformance.report.findings import (
     Finding,
     FmuReport,
     Location,
@@ -26,7 +26,7 @@ from conformance.findings import (
     Severity,
     evidence,
 )
-from conformance.layer import NOT_A_DAE_FMU
+from conformance.model.layer import NOT_A_DAE_FMU
 from tests.fixturekit import all_cases, materialise
 
 HERE = Path(__file__).resolve().parent

@@ -7,7 +7,7 @@ from pathlib import Path
 from junitparser import JUnitXml
 from sarif.loader import load_sarif_file
 
-from conformance.cli import main
+from conformance.commands.cli import main
 from conformance.reporters import REPORTER_BY_NAME
 from tests.fixturekit import all_cases, materialise
 from tests.reporters.test_github import parse

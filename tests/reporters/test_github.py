@@ -7,8 +7,8 @@ from dataclasses import dataclass, replace
 from hypothesis import given
 from hypothesis import strategies as st
 
-from conformance.findings import FmuReport, Report, Severity
-from conformance.layer import NOT_A_DAE_FMU
+from conformance.report.findings import FmuReport, Report, Severity
+from conformance.model.layer import NOT_A_DAE_FMU
 from conformance.reporters import REPORTER_BY_NAME, github, json_report
 from tests.reporters.samples import SAMPLE_CATALOGUE, compare_expected, sample_report
 

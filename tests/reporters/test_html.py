@@ -11,8 +11,8 @@ from pathlib import Path
 
 import pytest
 
-from conformance.catalogue import default_catalogue
-from conformance.findings import Finding, FmuReport, Location, Report, RunInfo, Severity, evidence
+from conformance.report.catalogue import default_catalogue
+from conformance.report.findings import Finding, FmuReport, Location, Report, RunInfo, Severity, evidence
 from conformance.reporters import REPORTER_BY_NAME
 from conformance.reporters.html import render
 

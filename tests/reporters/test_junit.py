@@ -7,9 +7,9 @@ import pytest
 from junitparser import Error, Failure, JUnitXml, Skipped
 from lxml import etree
 
-from conformance.catalogue import default_catalogue
-from conformance.findings import Report, RunInfo
-from conformance.layer import NOT_A_DAE_FMU
+from conformance.report.catalogue import default_catalogue
+from conformance.report.findings import Report, RunInfo
+from conformance.model.layer import NOT_A_DAE_FMU
 from conformance.reporters import REPORTER_BY_NAME, json_report, junit
 from tests.reporters.samples import (
     ENGINE_RUN,

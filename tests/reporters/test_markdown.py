@@ -5,7 +5,7 @@ import json
 import re
 from dataclasses import replace
 
-from conformance.findings import FmuReport, Report, Severity
+from conformance.report.findings import FmuReport, Report, Severity
 from conformance.reporters import REPORTER_BY_NAME, json_report, markdown
 from tests.reporters.samples import (
     SAMPLE_CATALOGUE,

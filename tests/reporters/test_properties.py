@@ -7,7 +7,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from lxml import etree
 
-from conformance.findings import Finding, FmuReport, Location, Report, RunInfo, Severity
+from conformance.report.findings import Finding, FmuReport, Location, Report, RunInfo, Severity
 from conformance.reporters import REPORTER_BY_NAME
 from tests.reporters.samples import SAMPLE_CATALOGUE, SCHEMAS, expected_junit_counts
 from tests.reporters.test_github import parse

@@ -8,8 +8,8 @@ from pathlib import Path
 import pytest
 from sarif.loader import load_sarif_file
 
-from conformance.catalogue import default_catalogue
-from conformance.findings import FmuReport, Location, Report, Severity
+from conformance.report.catalogue import default_catalogue
+from conformance.report.findings import FmuReport, Location, Report, Severity
 from conformance.reporters import REPORTER_BY_NAME, json_report, sarif
 from tests.reporters.samples import (
     MANIFEST,

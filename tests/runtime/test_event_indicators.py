@@ -9,8 +9,8 @@ from pathlib import Path
 import pytest
 from lxml import etree
 
-from conformance.manifest import MANIFEST, read_manifest
-from conformance.model import MODEL_DESCRIPTION, read_model_description
+from conformance.model.manifest import MANIFEST, read_manifest
+from conformance.model.description import MODEL_DESCRIPTION, read_model_description
 from conformance.probes.api import FmiError, Point
 from conformance.runtime.callrecord import CallRecord
 from conformance.runtime.layout import Layout

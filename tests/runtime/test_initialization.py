@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 from lxml import etree
 
-from conformance.manifest import MANIFEST, read_manifest
-from conformance.model import MODEL_DESCRIPTION, read_model_description
+from conformance.model.manifest import MANIFEST, read_manifest
+from conformance.model.description import MODEL_DESCRIPTION, read_model_description
 from conformance.runtime.callrecord import CallRecord
 from conformance.runtime.errors import FmiError
 from conformance.runtime.layout import Layout

@@ -15,8 +15,8 @@ from typing import Iterable, Iterator
 import pytest
 from lxml import etree
 
-from conformance.manifest import MANIFEST, Manifest, read_manifest
-from conformance.model import MODEL_DESCRIPTION, ModelDescription, Unknown, read_model_description
+from conformance.model.manifest import MANIFEST, Manifest, read_manifest
+from conformance.model.description import MODEL_DESCRIPTION, ModelDescription, Unknown, read_model_description
 from conformance.probes.api import FmiError
 from conformance.runtime.callrecord import CallRecord
 from conformance.runtime.instance import Dependency, Instance

@@ -19,13 +19,13 @@ import pytest
 from fmpy.validation import validate_fmu
 from lxml import etree
 
-from conformance.catalogue import default_catalogue
-from conformance.cli import main
-from conformance.engine import EngineOptions, check_fmu
-from conformance.layer import NOT_A_DAE_FMU
-from conformance.manifest import MANIFEST
-from conformance.schema_loader import core_schema_dir
-from conformance.schemas import validate_model_description
+from conformance.report.catalogue import default_catalogue
+from conformance.commands.cli import main
+from conformance.run.engine import EngineOptions, check_fmu
+from conformance.model.layer import NOT_A_DAE_FMU
+from conformance.model.manifest import MANIFEST
+from conformance.intake.schema_loader import core_schema_dir
+from conformance.intake.schemas import validate_model_description
 from scenes.build import build_scene, corpus_names, scene_xml_dir
 
 # Each corpus model and the interface types its modelDescription declares.

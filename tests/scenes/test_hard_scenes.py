@@ -23,9 +23,9 @@ import fmpy
 import numpy as np
 import pytest
 
-from conformance.catalogue import default_catalogue
-from conformance.engine import EngineOptions, check_fmu
-from conformance.findings import thaw
+from conformance.report.catalogue import default_catalogue
+from conformance.run.engine import EngineOptions, check_fmu
+from conformance.report.findings import thaw
 from scenes.build import SCENES_DIR, build_scene
 from tests.scenes.test_scenes import SCENES, Instance
 from tests.simkit import sim_settings

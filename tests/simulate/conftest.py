@@ -6,12 +6,12 @@ from pathlib import Path
 
 import pytest
 
-from conformance.manifest import MANIFEST, read_manifest
-from conformance.model import MODEL_DESCRIPTION, read_model_description
+from conformance.model.manifest import MANIFEST, read_manifest
+from conformance.model.description import MODEL_DESCRIPTION, read_model_description
 from conformance.runtime.callrecord import CallRecord
 from conformance.runtime.layout import Layout
 from conformance.runtime.library import Library
-from conformance.xmlsafe import parse_xml
+from conformance.intake.xmlsafe import parse_xml
 from scenes.build import build_scene
 
 

@@ -1,6 +1,6 @@
 """``lsdae simulate``: the CSV, the summary, exit codes and usage errors.
 
-The subcommand is driven through its own ``add_parser``/``run`` (what conformance/cli.py
+The subcommand is driven through its own ``add_parser``/``run`` (what conformance/commands/cli.py
 wires), so these tests do not depend on the wiring.
 """
 from __future__ import annotations
@@ -12,7 +12,7 @@ import zipfile
 
 import pytest
 
-from conformance.simulate_command import add_parser, run
+from conformance.commands.simulate import add_parser, run
 from scenes.build import build_scene
 from tests.fixtures.defects.variants import variant
 from tests.numerics.systems import VAN_DER_POL_IMPASSE

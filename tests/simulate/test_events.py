@@ -12,8 +12,8 @@ import fmpy
 import numpy as np
 import pytest
 
-from conformance.findings import thaw
-from conformance.simulate_command import add_parser, run, simulate_fmu, summary
+from conformance.report.findings import thaw
+from conformance.commands.simulate import add_parser, run, simulate_fmu, summary
 from scenes.build import build_scene
 from tests.simkit import sim_settings
 

@@ -7,9 +7,9 @@ import time
 import numpy as np
 import pytest
 
-from conformance.engine import EngineOptions, check_fmu
-from conformance.findings import thaw
-from conformance.simulate_fmu import simulate_fmu
+from conformance.run.engine import EngineOptions, check_fmu
+from conformance.report.findings import thaw
+from conformance.run.simulate_fmu import simulate_fmu
 from scenes.build import build_scene
 from tests.numerics.systems import ROBERTSON_REFERENCE, VAN_DER_POL_IMPASSE
 from tests.simkit import sim_settings

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import pytest
 
-from conformance.catalogue import default_catalogue
+from conformance.report.catalogue import default_catalogue
 from conformance.runtime.modes import start_instance
 from conformance.simulate.integrate import simulate_instance
 from conformance.simulate.jacobian_check import DerivativeCheck, choose_jacobian
@@ -83,7 +83,7 @@ def test_correct_equations_with_zero_derivatives_simulate(loaded, mode):
 
 
 def test_check_uses_the_probes_verdict_and_the_model_simulates():
-    from conformance.engine import EngineOptions, check_fmu
+    from conformance.run.engine import EngineOptions, check_fmu
     from conformance.reporters.json_report import fmu_dict
 
     fmu = build_scene("SimpleDAE", defines=["DEFECT_ZERO_DIRECTIONAL"])
@@ -101,7 +101,7 @@ def test_check_uses_the_probes_verdict_and_the_model_simulates():
 def test_lsdae_simulate_checks_at_the_initial_point(tmp_path, capsys):
     import argparse
 
-    from conformance.simulate_command import add_parser, run
+    from conformance.commands.simulate import add_parser, run
 
     parser = argparse.ArgumentParser(prog="lsdae")
     add_parser(parser.add_subparsers(dest="command", required=True))

@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from conformance.model import Unknown
+from conformance.model.description import Unknown
 from conformance.numerics.dae import integrate_dae
 from conformance.runtime.modes import start_instance
 from conformance.simulate.system import FINITE_DIFFERENCES, FmuDae, FmuOde, pattern_from

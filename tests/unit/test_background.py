@@ -5,7 +5,7 @@ import threading
 
 import pytest
 
-from conformance.background import Background
+from conformance.run.background import Background
 
 
 def test_the_value_comes_back_from_another_thread():

@@ -5,7 +5,7 @@ import json
 
 import pytest
 
-from conformance.cli import main
+from conformance.commands.cli import main
 from tests.fixturekit import Case, materialise
 
 
@@ -116,7 +116,7 @@ def test_unwritable_output_is_a_clear_error(scene, tmp_path, capsys):
 
 
 def test_a_crashing_check_prints_no_traceback(scene, monkeypatch, capsys):
-    from conformance import engine
+    from conformance.run import engine
     from conformance.checks import REGISTRY
 
     def broken(ctx, **_):

@@ -2,7 +2,7 @@
 rules fire (a differential run over FMUs that no rule finds fault with would compare nothing)."""
 from __future__ import annotations
 
-from conformance.engine import EngineOptions, check_paths
+from conformance.run.engine import EngineOptions, check_paths
 from conformance.reporters import json_report
 from scripts.differential import verdicts, write_fmus
 

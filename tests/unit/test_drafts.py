@@ -1,4 +1,4 @@
-"""Draft recognition, migration hints and the legacy/unrecognised violations (conformance/drafts/)."""
+"""Draft recognition, migration hints and the legacy/unrecognised violations (conformance/model/drafts/)."""
 from __future__ import annotations
 
 from pathlib import Path
@@ -8,7 +8,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from lxml import etree
 
-from conformance.drafts import detect, migrate
+from conformance.model.drafts import detect, migrate
 
 DATA = Path(__file__).parent / "data" / "manifests"
 

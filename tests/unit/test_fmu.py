@@ -15,8 +15,8 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from conformance.catalogue import load_catalogue
-from conformance.fmu import (
+from conformance.report.catalogue import load_catalogue
+from conformance.intake.fmu import (
     MANIFEST,
     MODEL_DESCRIPTION,
     ArchiveLimits,
@@ -26,7 +26,7 @@ from conformance.fmu import (
     find_manifest_candidates,
     open_fmu,
 )
-from conformance.paths import rules_dir
+from conformance.report.paths import rules_dir
 
 MD = b'<?xml version="1.0" encoding="UTF-8"?>\n<fmiModelDescription/>\n'
 SUPPRESS = [HealthCheck.function_scoped_fixture]  # tmp_path is reused; each example overwrites

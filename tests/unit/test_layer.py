@@ -1,17 +1,17 @@
-"""conformance/layer.py: what declares the fmi-ls-dae layer, and why layer rules are skipped."""
+"""conformance/model/layer.py: what declares the fmi-ls-dae layer, and why layer rules are skipped."""
 from __future__ import annotations
 
 import pytest
 from lxml import etree
 
-from conformance.layer import (
+from conformance.model.layer import (
     NOT_A_DAE_FMU,
     interface_types,
     layer_declaration,
     skip_reason,
 )
-from conformance.manifest import MANIFEST
-from conformance.model import read_model_description
+from conformance.model.manifest import MANIFEST
+from conformance.model.description import read_model_description
 
 
 def model(interfaces: str = '<ModelExchange modelIdentifier="M"/>', variables: str = ""):

@@ -18,9 +18,9 @@ from hypothesis import strategies as st
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import structural_rank as scipy_structural_rank
 
-from conformance.bipartite import BipartitePattern
-from conformance.dulmage_mendelsohn import dulmage_mendelsohn
-from conformance.matching import maximum_matching, structural_rank
+from conformance.numerics.graphs.bipartite import BipartitePattern
+from conformance.numerics.graphs.dulmage_mendelsohn import dulmage_mendelsohn
+from conformance.numerics.graphs.matching import maximum_matching, structural_rank
 
 MAX = 12
 

@@ -7,10 +7,10 @@ import pickle
 from lxml import etree
 
 from bench.generate import manifest_xml, model_description_xml
-from conformance import heap
-from conformance.manifest import read_manifest
-from conformance.model import NO_DETAILS, read_model_description
-from conformance.unknowns import Unknown, path_template
+from conformance.run import heap
+from conformance.model.manifest import read_manifest
+from conformance.model.description import NO_DETAILS, read_model_description
+from conformance.model.unknowns import Unknown, path_template
 
 
 def _read(m: int = 4):
@@ -132,7 +132,7 @@ def test_an_unknown_attribute_does_not_hide_the_details():
 
 
 def test_a_large_model_gives_its_freed_tree_back_before_the_manifest(monkeypatch):
-    from conformance import engine
+    from conformance.run import engine
     from scenes.build import build_scene
 
     calls: list[int] = []

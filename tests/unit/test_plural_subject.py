@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import pytest
 
-from conformance.collector import plural_subject
+from conformance.run.collector import plural_subject
 
 GROUP = "4 items ('a', 'b', 'c', 'd')"
 

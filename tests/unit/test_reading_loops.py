@@ -12,10 +12,10 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from lxml import etree
 
-from conformance.manifest import _ref, _refs
-from conformance.model import _details, _effective, _variables
-from conformance.model_parts import NO_DETAILS
-from conformance.unknowns import parse_unknown, parse_vr, read_structure
+from conformance.model.manifest import _ref, _refs
+from conformance.model.description import _details, _effective, _variables
+from conformance.model.parts import NO_DETAILS
+from conformance.model.unknowns import parse_unknown, parse_vr, read_structure
 
 NS = "urn:x"
 KINDS = ["Output", "ContinuousStateDerivative", "InitialUnknown", "Residual", f"{{{NS}}}Output"]
@@ -104,7 +104,7 @@ def variables_xml(draw) -> str:
 
 def _plain_variables(container: etree._Element) -> list:
     """Each variable read attribute by attribute, as the reader did before its one loop."""
-    from conformance.model_parts import VARIABLE_TYPES, Variable
+    from conformance.model.parts import VARIABLE_TYPES, Variable
 
     out, kinds, shared = [], {}, {}
     for el in container:

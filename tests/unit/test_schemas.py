@@ -1,5 +1,5 @@
-"""Schema validation of manifests and modelDescription.xml (conformance/schemas.py), and loading
-the schemas offline (conformance/schema_loader.py)."""
+"""Schema validation of manifests and modelDescription.xml (conformance/intake/schemas.py), and loading
+the schemas offline (conformance/intake/schema_loader.py)."""
 from __future__ import annotations
 
 import socket
@@ -8,10 +8,10 @@ from pathlib import Path
 import pytest
 from lxml import etree
 
-from conformance import schema_loader, schemas
-from conformance.drafts import detect, migrate
-from conformance.findings import Violation
-from conformance.schema_messages import clean_message
+from conformance.intake import schema_loader, schemas
+from conformance.model.drafts import detect, migrate
+from conformance.report.findings import Violation
+from conformance.intake.schema_messages import clean_message
 
 DATA = Path(__file__).parent / "data" / "manifests"
 SHAPES = sorted(p.name for p in DATA.glob("*.xml") if p.name != "unknown-root.xml")

@@ -3,10 +3,10 @@ from __future__ import annotations
 
 import zipfile
 
-from conformance import source_texts
-from conformance.engine import EngineOptions, check_fmu
-from conformance.fmu import default_limits
-from conformance.source_texts import SourceTexts
+from conformance.run import source_texts
+from conformance.run.engine import EngineOptions, check_fmu
+from conformance.intake.fmu import default_limits
+from conformance.run.source_texts import SourceTexts
 from scenes.build import build_scene
 
 

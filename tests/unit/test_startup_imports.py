@@ -1,6 +1,6 @@
 """Each command imports only what it uses (issue 11: instant start for pre-commit hooks).
 
-Every case runs ``conformance.cli.main`` in a fresh interpreter and lists the heavy modules that
+Every case runs ``conformance.commands.cli.main`` in a fresh interpreter and lists the heavy modules that
 ended up in ``sys.modules``. A module a command does not use must not be there: the engine is not
 loaded by ``--version``, lxml not by ``lsdae rules``, numpy and scipy not by a static check of a
 small FMU, multiprocessing not without ``-j``; and the probes' numpy, fmpy and probe families
@@ -21,7 +21,7 @@ HEAVY = ("numpy", "scipy", "xmlschema", "fmpy", "matplotlib", "multiprocessing")
 
 _PROBE = """
 import contextlib, io, json, sys
-from conformance.cli import main
+from conformance.commands.cli import main
 with contextlib.redirect_stdout(io.StringIO()):
     try:
         code = main(sys.argv[1:])
@@ -51,7 +51,7 @@ def small_fmu() -> str:
 def test_commands_that_read_no_fmu_load_no_heavy_module_and_no_xml_library(argv):
     code, loaded = _loaded(argv)
     assert code == 0
-    assert sorted(loaded & {*HEAVY, "lxml", "conformance.engine"}) == []
+    assert sorted(loaded & {*HEAVY, "lxml", "conformance.run.engine"}) == []
 
 
 def test_a_static_check_of_a_small_fmu_loads_no_numerical_library(small_fmu, tmp_path):

@@ -1,11 +1,11 @@
-"""The structured-name grammar (conformance/structured_names.py, FMI 3.0.2 §2.4.7.5.1)."""
+"""The structured-name grammar (conformance/model/structured_names.py, FMI 3.0.2 §2.4.7.5.1)."""
 from __future__ import annotations
 
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from conformance.structured_names import all_structured, is_structured_name, name_problem
+from conformance.model.structured_names import all_structured, is_structured_name, name_problem
 
 # The examples the standard gives, plus one of each construct.
 LEGAL = [

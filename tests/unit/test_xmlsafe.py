@@ -8,10 +8,10 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from lxml import etree
 
-from conformance.catalogue import load_catalogue
-from conformance.element_path import element_path
-from conformance.paths import rules_dir
-from conformance.xmlsafe import parse_xml
+from conformance.report.catalogue import load_catalogue
+from conformance.intake.element_path import element_path
+from conformance.report.paths import rules_dir
+from conformance.intake.xmlsafe import parse_xml
 
 EMITTED = {"xml-not-well-formed", "xml-unsafe-construct", "xml-encoding"}
 GOOD = b"""<?xml version="1.0" encoding="UTF-8"?>

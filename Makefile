@@ -47,6 +47,7 @@ bench: $(STAMP)
 	$(BIN)/python -m bench.sim_bench --out reports/bench
 	$(BIN)/python -m bench.startup_bench --out reports/bench
 	$(BIN)/python -m bench.modes_bench --out reports/bench
+	$(BIN)/python -m bench.scale_bench --out reports/bench
 
 # The mutation campaign of the scenes' C code (issue 20): sample, build, oracle, lsdae check,
 # verdicts, and detection against time; writes reports/mutation/ (about 25 min on 2 cores).

@@ -145,12 +145,13 @@ class SceneFmu(LoadedFmu):
         try:
             t0 = float(self.layout.start_time)
             if mode == "dae":
-                dae = FmuDae(inst, self.layout, self.manifest)
+                dae = FmuDae(inst, self.layout, self.manifest,
+                             dense_up_to=settings.dense_up_to)
                 y0 = inst.get_float64([*dae.states, *dae.algebraic])
                 start = time.perf_counter()
                 traj = integrate_dae(dae, settings, t0=t0, y0=y0, stop=stop)
             else:
-                ode = FmuOde(inst, self.layout, self.model)
+                ode = FmuOde(inst, self.layout, self.model, dense_up_to=settings.dense_up_to)
                 nominal = np.array([self.layout.scale(vr) for vr in ode.algebraic])
                 x0 = inst.get_float64(ode.states)
                 start = time.perf_counter()

@@ -37,34 +37,51 @@ class Comparison:
 
 
 def compare(dae: Trajectory, ode: Trajectory) -> Comparison | None:
-    """Gaps between two trajectories at their common output times (None: nothing in common)."""
+    """Gaps between two trajectories at their common output times (None: nothing in common).
+    One pass over a (times x variables) array: thousands of variables cost no more than a
+    few array operations."""
     common_t, i_dae, i_ode = np.intersect1d(np.asarray(dae.times, dtype=float),
                                             np.asarray(ode.times, dtype=float),
                                             return_indices=True)
-    names = [n for n in dae.names if n in ode.names]
-    left_out = [n for n in dae.names if n not in ode.names] + [
-        n for n in ode.names if n not in dae.names]
+    dae_at = _positions(dae.names)
+    ode_at = _positions(ode.names)
+    names = [n for n in dae.names if n in ode_at]
+    left_out = [n for n in dae.names if n not in ode_at] + [
+        n for n in ode.names if n not in dae_at]
     if common_t.size == 0 or not names:
         return None
-    gaps: dict[str, float] = {}
-    worst: dict[str, Any] = {}
-    worst_ratio = -1.0
-    for name in names:
-        a = dae.values[i_dae, dae.names.index(name)]
-        b = ode.values[i_ode, ode.names.index(name)]
-        atol = dae.atol[dae.names.index(name)]
-        ok = np.isfinite(a) & np.isfinite(b)
-        if not np.any(ok):
-            left_out.append(name)
-            continue
-        tol = dae.rtol * np.maximum(np.abs(a), np.abs(b)) + atol
+    cd = np.array([dae_at[n] for n in names], dtype=np.intp)
+    co = np.array([ode_at[n] for n in names], dtype=np.intp)
+    a = dae.values[np.ix_(i_dae, cd)]
+    b = ode.values[np.ix_(i_ode, co)]
+    atol = np.asarray(dae.atol, dtype=float)[cd]
+    ok = np.isfinite(a) & np.isfinite(b)
+    tol = dae.rtol * np.maximum(np.abs(a), np.abs(b)) + atol[None, :]
+    with np.errstate(invalid="ignore", over="ignore"):
         ratio = np.where(ok, np.abs(a - b) / np.where(tol > 0, tol, np.inf), 0.0)
-        k = int(np.argmax(ratio))
-        gaps[name] = float(ratio[k])
-        if ratio[k] > worst_ratio:
-            worst_ratio = float(ratio[k])
-            worst = {"variable": name, "t": float(common_t[k]), "dae": float(a[k]),
-                     "ode": float(b[k]), "difference": float(abs(a[k] - b[k])),
-                     "tolerance_unit": float(tol[k]), "gap": float(ratio[k])}
+    at = np.argmax(ratio, axis=0)             # the first time of each variable's largest gap
+    largest = ratio[at, np.arange(len(names))]
+    compared = ok.any(axis=0)
+    gaps: dict[str, float] = {}
+    for c in range(len(names)):
+        if compared[c]:
+            gaps[names[c]] = float(largest[c])
+        else:
+            left_out.append(names[c])
+    worst: dict[str, Any] = {}
+    if compared.any():
+        c = int(np.flatnonzero(compared)[np.argmax(largest[compared])])  # the first largest
+        k = int(at[c])
+        worst = {"variable": names[c], "t": float(common_t[k]), "dae": float(a[k, c]),
+                 "ode": float(b[k, c]), "difference": float(abs(a[k, c] - b[k, c])),
+                 "tolerance_unit": float(tol[k, c]), "gap": float(ratio[k, c])}
     return Comparison(int(common_t.size), [n for n in names if n in gaps], gaps, worst,
                       left_out)
+
+
+def _positions(names: list[str]) -> dict[str, int]:
+    """Each name's first column (``list.index`` for every name at once)."""
+    out: dict[str, int] = {}
+    for k, name in enumerate(names):
+        out.setdefault(name, k)
+    return out

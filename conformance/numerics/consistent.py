@@ -11,6 +11,7 @@ from typing import Any, Protocol, Sequence
 
 import numpy as np
 
+from . import jacobians
 from .limits import Stop
 from .settings import INIT, SINGULAR
 
@@ -33,14 +34,16 @@ class DaeSystem(Protocol):
         """``[f; g]`` at (t, y), shape (nx + nw,); raises EvaluationFailed."""
         ...
 
-    def partials(self, t: float, y: np.ndarray) -> np.ndarray:
-        """``d[f; g]/d[x; w]`` at (t, y), shape (nx + nw, nx + nw); raises EvaluationFailed."""
+    def partials(self, t: float, y: np.ndarray) -> Any:
+        """``d[f; g]/d[x; w]`` at (t, y), shape (nx + nw, nx + nw): an ndarray, or a
+        scipy.sparse matrix of the entries of ``pattern`` (a large system; see
+        ``jacobians.py``); raises EvaluationFailed."""
         ...
 
 
-def scales_of(system: DaeSystem, jac: np.ndarray) -> np.ndarray:
+def scales_of(system: DaeSystem, jac: Any) -> np.ndarray:
     """S_i = sum_j |dg_i/dv_j| * nominal_j: the size of each residual's sensitivity, (nw,)."""
-    return np.abs(jac[system.nx:, :] * system.nominal[None, :]).sum(axis=1)
+    return jacobians.weighted_row_sums(jac[system.nx:, :], system.nominal)
 
 
 def _residual_summary(g: np.ndarray, scales: np.ndarray) -> dict[str, float | None]:
@@ -78,7 +81,7 @@ def consistent_start(system: DaeSystem, t0: float, y0: np.ndarray, atol: np.ndar
             converged = True  # zero up to rounding: a further step would only add noise
             break
         try:
-            dw = np.linalg.solve(jac[nx:, nx:], -g)
+            dw = jacobians.solve(jac[nx:, nx:], -g)
         except np.linalg.LinAlgError:
             raise Stop(SINGULAR, "dg/dw is singular at the initial point: Newton cannot "
                        "correct the algebraic variables", t0, **info) from None

@@ -6,7 +6,11 @@ steps shrink until ``t + h == t`` and the solver keeps "succeeding" forever. So 
 here are driven one internal step at a time (``method="onestep"``, :class:`Stepper`), and after
 each step, and inside every callback, :class:`Budget` checks
 
-* the number of steps (``max_steps``) and the wall clock (``wall_seconds``);
+* the number of steps (``max_steps``): a count, the same on every machine, and the only budget
+  whose end is a verdict (``budget``);
+* the wall clock (``wall_seconds``): a safety net only, so that a slow machine cannot hang the
+  check; its end is ``time-budget``, after which the simulation rules do not run (a verdict
+  must not depend on the machine's speed or load);
 * progress in time: ``stall_steps`` steps that together move time by less than a relative
   ``STALL_RTOL`` end the run as a solver failure (the solver cannot go on, it only does not
   say so);
@@ -22,7 +26,9 @@ from typing import Any, Callable
 
 import numpy as np
 
-from .settings import BUDGET, FMU_FAILED, SOLVER
+from .conditioning import conditioning
+from .jacobians import is_sparse, weighted_row_sums
+from .settings import BUDGET, FMU_FAILED, SOLVER, TIME_BUDGET
 
 STALL_RTOL = 1e-10   # relative progress in time that counts as "moving"
 
@@ -60,9 +66,10 @@ class Budget:
         return self.clock() - self.started
 
     def check_clock(self, t: float) -> None:
-        """Called from inside the callbacks too: one slow step cannot outlast the budget."""
+        """Called from inside the callbacks too: one slow step cannot outlast the safety net."""
         if self.clock() > self.deadline:
-            raise Stop(BUDGET, f"the wall-clock budget of {self.wall_seconds:g} s ran out", t,
+            raise Stop(TIME_BUDGET, f"lsdae's wall-clock safety net of {self.wall_seconds:g} s "
+                       "ran out (the machine's speed, not the FMU's: no verdict)", t,
                        limit="wall_seconds", value=self.wall_seconds)
 
     def check_step(self, t: float, steps: int) -> None:
@@ -82,18 +89,23 @@ class Budget:
                        value=self.stall_steps, stalled_since=self._mark[0])
 
 
-def scaled_condition(jac: np.ndarray, nx: int, nominal: np.ndarray) -> tuple[float, np.ndarray]:
+def scaled_condition(jac: Any, nx: int, nominal: np.ndarray, *, dense_up_to: int
+                     ) -> tuple[float, np.ndarray]:
     """How close dg/dw is to singular, relative to how strongly g depends on everything.
 
     Parameters
     ----------
-    jac : ndarray, shape (nx + nw, nx + nw)
+    jac : ndarray or scipy.sparse matrix, shape (nx + nw, nx + nw)
         d[f; g]/d[x; w]: rows the derivatives then the residuals, columns the states then the
         algebraic variables.
     nx : int
         Number of states.
     nominal : ndarray, shape (nx + nw,)
         Nominal values of the states and algebraic variables (the columns).
+    dense_up_to : int
+        Up to this many algebraic variables ``sigma_min`` comes from a dense SVD; above it
+        from a sparse LU, as ``1 / ||G^-1||_1`` (Hager-Higham estimate,
+        :mod:`.conditioning`), within a factor sqrt(nw) of ``sigma_min``.
 
     Returns
     -------
@@ -110,6 +122,8 @@ def scaled_condition(jac: np.ndarray, nx: int, nominal: np.ndarray) -> tuple[flo
     nw = jac.shape[0] - nx
     if nw <= 0:
         return 1.0, np.zeros(0)
+    if is_sparse(jac) or nw > dense_up_to:
+        return _sparse_scaled_condition(jac, nx, np.asarray(nominal, dtype=float), dense_up_to)
     g = jac[nx:, :] * np.asarray(nominal, dtype=float)[None, :]
     if not np.all(np.isfinite(g)):
         return np.inf, np.zeros(nw)
@@ -119,6 +133,23 @@ def scaled_condition(jac: np.ndarray, nx: int, nominal: np.ndarray) -> tuple[flo
         return np.inf, direction
     _, sv, vt = np.linalg.svd(g[:, nx:] / total[:, None])
     return (float(1.0 / sv[-1]) if sv[-1] > 0 else np.inf), vt[-1]
+
+
+def _sparse_scaled_condition(jac: Any, nx: int, nominal: np.ndarray, dense_up_to: int
+                             ) -> tuple[float, np.ndarray]:
+    """:func:`scaled_condition` without forming anything of size n x n."""
+    import scipy.sparse as sp  # scipy: only for a Jacobian too large for a dense SVD
+
+    rows = sp.csr_array(jac)[nx:, :]
+    if not np.all(np.isfinite(rows.data)):
+        return np.inf, np.zeros(rows.shape[0])
+    total = weighted_row_sums(rows, nominal)
+    if np.any(total == 0):
+        return np.inf, np.zeros(rows.shape[0])
+    g = sp.diags_array(1.0 / total) @ rows[:, nx:] @ sp.diags_array(nominal[nx:])
+    found = conditioning(sp.csc_array(g), dense_up_to=dense_up_to)
+    smallest = found.smallest
+    return (float(1.0 / smallest) if smallest > 0 else np.inf), found.direction
 
 
 ROOT_RETURN = 2   # IDA_ROOT_RETURN and CV_ROOT_RETURN: a step ended at a root of the events

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import numdiff
+from . import floors, numdiff
 from .colouring import (Colouring, Function, Pattern, coloured_differences, coloured_products,
                         colour_rows, per_step, predict, predict_abs, random_directions)
 
@@ -47,7 +47,8 @@ class Entries:
     Per entry (shape (k,)): ``rows``, ``cols``, ``declared``; ``fd`` the finite difference (units
     of the unknown per unit of the known), ``truncation`` its error estimate, ``rounding`` the
     factor turning the row's noise into a rounding error, ``zero`` the function did not move at
-    all; ``dd``, ``adj`` the FMU's values (NaN when not available). Per row (shape (m,)): ``f0``
+    all; ``dd``, ``adj`` the FMU's values (NaN when not available); ``step`` the step of the
+    entry's known (0: not perturbed). Per row (shape (m,)): ``f0``
     and ``basis = eps * (|f| + sum_j |x_j J_ij|)`` (times a number of ulps: the noise).
     ``dot``: (v·(J s) by directional, (vJ)·s by adjoint, |v|·|J|·|s|) or None.
     """
@@ -61,6 +62,7 @@ class Entries:
     zero: np.ndarray
     dd: np.ndarray
     adj: np.ndarray
+    step: np.ndarray
     f0: np.ndarray
     basis: np.ndarray
     localised: np.ndarray
@@ -134,7 +136,7 @@ def measure(sources: Sources, pattern: Pattern, colouring: Colouring, steps: np.
     keep = ~np.isin(pattern.rows, np.fromiter(suspects, dtype=np.intp, count=len(suspects)))
     table = [pattern.rows[keep], pattern.cols[keep], np.ones(int(keep.sum()), dtype=bool),
              fd.value[keep], fd.truncation[keep], fd.rounding[keep], fd.zero[keep],
-             dd_vals[keep], adj_vals[keep]]
+             dd_vals[keep], adj_vals[keep], steps[pattern.cols[keep]]]
     if suspects:
         table = _localise(table, suspects, pattern, fun, dd, adj, sources, active, steps,
                           method, f0, rows_ok)
@@ -220,7 +222,7 @@ def _localise(table, suspects, pattern, fun, dd, adj, sources, active, steps, me
             unit = np.zeros(m)
             unit[i] = 1.0
             adj_rows[i] = adj(unit)
-    extra: list[list] = [[] for _ in range(9)]
+    extra: list[list] = [[] for _ in range(10)]
     for i in sorted(wanted):
         for j in sorted(wanted[i]):
             diff, dd_col = per_col[j]
@@ -229,10 +231,10 @@ def _localise(table, suspects, pattern, fun, dd, adj, sources, active, steps, me
                    per_step(diff.truncation[i:i + 1], h)[0],
                    per_step(np.array([diff.rounding]), h)[0], diff.exact_zero[i],
                    dd_col[i] if dd_col is not None else np.nan,
-                   adj_rows[i][j] if i in adj_rows and active[j] else np.nan)
+                   adj_rows[i][j] if i in adj_rows and active[j] else np.nan, steps[j])
             for column, value in zip(extra, row):
                 column.append(value)
-    dtypes = (np.intp, np.intp, bool, float, float, float, bool, float, float)
+    dtypes = (np.intp, np.intp, bool, float, float, float, bool, float, float, float)
     return [np.concatenate([old, np.asarray(new, dtype=dt)])
             for old, new, dt in zip(table, extra, dtypes)]
 
@@ -247,13 +249,26 @@ def row_scale(e: Entries, nominal: np.ndarray, m: int, *,
     return np.bincount(e.rows, weights=weights, minlength=m)
 
 
+def floor(e: Entries, m: int, *, ulps: float, row_nominal: np.ndarray | None = None
+          ) -> np.ndarray:
+    """The absolute floor of every entry's comparison (:mod:`.floors`), shape (k,): below it
+    a finite difference of this row and step resolves nothing. ``row_nominal`` (m,): the
+    unknowns' nominal values (1 without)."""
+    under = floors.underflowing_rows(e.rows, e.fd, m)[e.rows]
+    nominal_i = np.ones(e.rows.size) if row_nominal is None else \
+        np.asarray(row_nominal, dtype=float)[e.rows]
+    return floors.derivative_floor(nominal_i, e.step, under, ulps=ulps)
+
+
 def disagreement(e: Entries, values: np.ndarray, nominal: np.ndarray, m: int, *, rtol: float,
-                 margin: float, ulps: float
+                 margin: float, ulps: float, row_nominal: np.ndarray | None = None
                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """How far ``values`` (the FMU's entries, shape (k,)) are from the finite differences:
-    ``|values - fd|``, the tolerance ``margin * error + rtol * S_i / nominal_j``, the error
-    estimate of ``fd`` for a noise of ``ulps``, and ``S_i / nominal_j`` (each of shape (k,)).
-    An entry disagrees where the first exceeds the second."""
+    ``|values - fd|``, the tolerance ``margin * error + rtol * S_i / nominal_j`` but never
+    below the entry's :func:`floor`, the error estimate of ``fd`` for a noise of ``ulps``, and
+    ``S_i / nominal_j`` (each of shape (k,)). An entry disagrees where the first exceeds the
+    second."""
     scale = row_scale(e, nominal, m)[e.rows] / nominal[e.cols]
     err = e.error(ulps)
-    return np.abs(values - e.fd), margin * err + rtol * scale, err, scale
+    tol = np.maximum(margin * err + rtol * scale, floor(e, m, ulps=ulps, row_nominal=row_nominal))
+    return np.abs(values - e.fd), tol, err, scale

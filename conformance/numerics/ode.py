@@ -9,10 +9,12 @@ Newton iteration fail, and CVODE cuts the step.
 """
 from __future__ import annotations
 
+import warnings
 from typing import Any, Protocol, Sequence
 
 import numpy as np
 
+from . import jacobians
 from .events import EventLog, first_time_event, read_indicators, run_through_events, summarise
 from .limits import Budget, EvaluationFailed, Stepper, Stop, blame_failures, blame_solver_failure
 from .settings import BUDGET, FMU_FAILED, OK, SOLVER, Settings, Trajectory
@@ -30,7 +32,7 @@ class OdeSystem(Protocol):
 
     def evaluate(self, t: float, x: np.ndarray) -> np.ndarray: ...
 
-    def partials(self, t: float, x: np.ndarray) -> np.ndarray: ...
+    def partials(self, t: float, x: np.ndarray) -> Any: ...   # ndarray, or sparse: see dae.py
 
     def algebraic_values(self, t: float, x: np.ndarray) -> np.ndarray: ...
 
@@ -81,7 +83,8 @@ def integrate_ode(system: OdeSystem, settings: Settings, *, t0: float, x0: np.nd
             failures.append((t, "non-finite values", "NaN or Inf"))
         xp[:] = value
 
-    last: dict[str, np.ndarray] = {}
+    last: dict[str, Any] = {}
+    template: list[jacobians.SparseTemplate] = []   # the sparse solver's pattern, if sparse
 
     def jac(t: float, x: np.ndarray, xp: np.ndarray, out: np.ndarray) -> None:
         budget.check_clock(t)
@@ -92,10 +95,13 @@ def integrate_ode(system: OdeSystem, settings: Settings, *, t0: float, x0: np.nd
             if not exc.recoverable:
                 raise Stop(FMU_FAILED, f"{exc.call} returned {exc.status}", t, call=exc.call,
                            status=exc.status, log=list(exc.log)[:5]) from None
-            j = last.get("jac", np.eye(nx))
-        if not np.all(np.isfinite(j)):
-            j = last.get("jac", np.eye(nx))
+            j = last.get("jac", jacobians.identity(nx, sparse=bool(template)))
+        if not jacobians.finite(j):
+            j = last.get("jac", jacobians.identity(nx, sparse=bool(template)))
         last["jac"] = j
+        if template:
+            template[0].fill(j, out)
+            return
         out[:, :] = j
 
     def events(t: float, x: np.ndarray, out: np.ndarray) -> None:
@@ -113,8 +119,15 @@ def integrate_ode(system: OdeSystem, settings: Settings, *, t0: float, x0: np.nd
         x0 = np.asarray(x0, dtype=float)
         record(0, t0, x0)
         watch = {"eventsfn": events, "num_events": log.indicators} if log.indicators else {}
-        solver = CVODE(rhs, jacfn=jac, method="BDF", rtol=settings.rtol, atol=atol,
-                       linsolver="dense", **watch)
+        if nx > settings.dense_up_to and getattr(system, "pattern", None) is not None:
+            template.append(jacobians.SparseTemplate(nx, *system.pattern))  # type: ignore
+            watch.update(linsolver="sparse", sparsity=template[0].pattern)
+        else:
+            watch.update(linsolver="dense")
+        with warnings.catch_warnings():  # "custom sparse Jacobian ... ignored": ours is used
+            warnings.simplefilter("ignore", UserWarning)
+            solver = CVODE(rhs, jacfn=jac, method="BDF", rtol=settings.rtol, atol=atol,
+                           **watch)
         solver.init_step(t0, x0)
         stepper = Stepper(solver, times, stop, budget, record, x0, exact=bool(log.indicators))
 

@@ -14,9 +14,11 @@ import numpy as np
 
 MODES = ("dae", "ode", "both")
 
-# Why a run ended; every status but "ok" is reported by one rule.
-OK, SOLVER, SINGULAR, FMU_FAILED, BUDGET, INIT = (
-    "ok", "solver-failure", "singular", "fmu-failure", "budget", "init-failure")
+# Why a run ended; every status but "ok" and "time-budget" is reported by one rule. BUDGET is
+# our budget of steps (a count: the same on every machine); TIME_BUDGET is the wall-clock
+# safety net, whose end says nothing about the FMU: the simulation rules do not run then.
+OK, SOLVER, SINGULAR, FMU_FAILED, BUDGET, INIT, TIME_BUDGET = (
+    "ok", "solver-failure", "singular", "fmu-failure", "budget", "init-failure", "time-budget")
 
 
 @dataclass(frozen=True)
@@ -33,12 +35,14 @@ class Settings:
     stop_time: float                    # 0: DefaultExperiment stopTime, else start + horizon
     horizon: float
     output_points: int                  # an even grid from start to stop, both included
-    max_steps: int
-    wall_seconds: float
+    max_steps: int                      # the budget that decides simulation-budget-exceeded
+    wall_seconds: float                 # a safety net only: its end is "not run", no finding
     stall_steps: int                    # steps without progress in time before giving up
     max_condition: float                # stop when the scaled dg/dw condition exceeds this
     stalled_condition: float            # a run that stalls or fails with dg/dw this bad: singular
     record_wall_time: bool              # wall_s in the report (not reproducible: off in check)
+    dense_up_to: int                    # unknowns up to which Jacobians are dense arrays
+    published_series: int               # variables whose trajectory the report keeps (0: all)
     output_times: tuple[float, ...] = ()  # explicit output times (replace the grid)
     start_values: tuple[tuple[str, float], ...] = ()  # (variable name, value), set before init
 
@@ -137,19 +141,26 @@ class Trajectory:
     def series(self, name: str) -> np.ndarray:
         return self.values[:, self.names.index(name)]
 
-    def to_info(self, *, limit: int | None = None, timing: bool = True) -> dict[str, Any]:
+    def to_info(self, *, limit: int | None = None, timing: bool = True,
+                series: int = 0) -> dict[str, Any]:
         """A JSON-ready summary (``limit``: keep at most that many output times, evenly;
-        ``timing``: include ``wall_s``, which makes two reports of one FMU differ)."""
+        ``timing``: include ``wall_s``, which makes two reports of one FMU differ; ``series``:
+        keep the trajectories of the first that many variables, states first, 0 for all,
+        and say how many were left out)."""
         rows = np.arange(len(self.times))
         if limit is not None and len(rows) > limit > 1:
             rows = np.unique(np.linspace(0, len(rows) - 1, limit).round().astype(int))
+        kept = len(self.names) if series <= 0 else min(series, len(self.names))
+        names = self.names[:kept]
+        block = self.values[rows][:, :kept]
+        finite = np.isfinite(block).all(axis=0)
         info = {
             "mode": self.mode, "status": self.status, "message": self.message,
             "times": [float(self.times[i]) for i in rows],
-            "series": {n: [_json_float(self.values[i, k]) for i in rows]
-                       for k, n in enumerate(self.names)},
-            "kinds": dict(zip(self.names, self.kinds)),
-            "rtol": self.rtol, "atol": dict(zip(self.names, self.atol)),
+            "series": {n: block[:, k].tolist() if finite[k] else
+                       [_json_float(v) for v in block[:, k]] for k, n in enumerate(names)},
+            "kinds": dict(zip(names, self.kinds)),
+            "rtol": self.rtol, "atol": dict(zip(names, self.atol)),
             "t_start": self.t_start, "t_end": self.t_end, "stop_time": self.stop_time,
             "steps": self.steps, "function_calls": self.function_calls,
             "jacobian_calls": self.jacobian_calls, "fmi_calls": self.fmi_calls,
@@ -157,6 +168,8 @@ class Trajectory:
             "recovered": self.recovered, "max_condition": _json_float(self.max_condition),
             "max_condition_t": self.max_condition_t, "init": self.init, "event": self.event,
         }
+        if kept < len(self.names):  # only then: smaller reports stay as they were
+            info["series_left_out"] = len(self.names) - kept
         if self.residual_along:
             info["residual_along"] = self.residual_along
         if self.has_events:  # only then: the reports of FMUs without events stay as they were

@@ -77,9 +77,10 @@ def algebraic_not_settable(ctx: ProbeContext, *, step: float, rtol: float,
     if len(chosen) > max_variables:
         picked = ctx.rng.choice(len(chosen), size=max_variables, replace=False)
         chosen = [chosen[i] for i in sorted(picked)]
+    scales = np.array([layout.scale(w) for w in watch])
     for vr in chosen:
-        yield from _set_one(ctx, dae, layout, start, vr, watch, base, step=step, rtol=rtol,
-                            react_rtol=react_rtol)
+        yield from _set_one(ctx, dae, layout, start, vr, watch, base, scales, step=step,
+                            rtol=rtol, react_rtol=react_rtol)
 
 
 def _set_knowns(dae: Instance, point: Point) -> None:
@@ -92,8 +93,8 @@ def _set_knowns(dae: Instance, point: Point) -> None:
 
 
 def _set_one(ctx: ProbeContext, dae: Instance, layout: Layout, start: Point, vr: int,
-             watch: list[int], base: np.ndarray, *, step: float, rtol: float,
-             react_rtol: float) -> Iterator[Violation]:
+             watch: list[int], base: np.ndarray, scales: np.ndarray, *, step: float,
+             rtol: float, react_rtol: float) -> Iterator[Violation]:
     where = manifest_location(ctx, vr, ("AlgebraicVariable",))
     name = layout.name(vr)
     v0 = start.values.get(vr, layout.start.get(vr, 0.0))
@@ -113,7 +114,6 @@ def _set_one(ctx: ProbeContext, dae: Instance, layout: Layout, start: Point, vr:
             return
         after = dae.get_float64(watch)
         tried.append(value)
-        scales = np.array([layout.scale(w) for w in watch])
         change = np.abs(after - base)
         if np.any(change > react_rtol * np.maximum(scales, np.abs(base))):
             return

@@ -14,68 +14,87 @@ comparison of both modes at one point are in :mod:`.ode_dae_comparison`.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Iterator
+from typing import Any, Iterator
 
 import numpy as np
 
 from ..report.findings import Violation, evidence
 from ..numerics import numdiff
+from ..numerics.conditioning import conditioning
 from .api import ODE_DAE_FAULT, ProbeContext, ProbeSkipped, noted
-from .entry_comparison import directional_options, directional_verdict
+from .entry_comparison import directional_options, directional_verdict, entry_floor
 from .jacobian import PointSurvey, Survey, point_evidence, surveyed
-from .ode_dae_comparison import compare_modes
+from .ode_dae_comparison import compare_modes, sparse_dgdw
 
 
 @dataclass
 class _Block:
-    """dg/dw at one point, scaled; ``error`` the 2-norm bound (Frobenius) of its measurement
-    error, scaled the same way (0 for the FMU's own, confirmed derivatives)."""
+    """dg/dw at one point, scaled (an ndarray up to ``dense_up_to`` rows, else a sparse CSC
+    matrix); ``error`` the bound of its measurement error, scaled the same way, in the norm
+    the block is judged in (Frobenius for 2-norm, max column sum for the 1-norm; 0 for the
+    FMU's own, confirmed derivatives)."""
 
     ps: PointSurvey
-    g: np.ndarray
+    g: Any
     error: float
     source: str
     note: str
 
 
-def _algebraic_blocks(ctx: ProbeContext, s: Survey) -> Iterator[_Block]:
+def _algebraic_blocks(ctx: ProbeContext, s: Survey, dense_up_to: int) -> Iterator[_Block]:
     """dg/dw at every point, scaled: columns by the algebraic variables' nominals, rows by the
     residuals' nominals when declared, else equilibrated (a residual's scale is arbitrary).
     From the FMU's directional derivatives only when the survey confirmed them, else from
     finite differences, with their error estimates (``margin`` times, as
-    directional-derivative-mismatch counts them) and a note why the FMU's were not used."""
+    directional-derivative-mismatch counts them, and never below the entries' absolute floors)
+    and a note why the FMU's were not used. Dense up to ``dense_up_to`` rows, else sparse: the
+    measured entries only, nothing of size n x n."""
     layout = s.layout
     assert layout is not None
     res = layout.indices("residual", of="rows")
     alg = layout.indices("algebraic")
     if res.size == 0 or res.size != alg.size:
         return  # residual-count-mismatch (static) explains a non-square dg/dw
-    rpos = {int(i): a for a, i in enumerate(res)}
-    cpos = {int(j): a for a, j in enumerate(alg)}
+    n = res.size
+    rpos = np.full(len(layout.rows), -1, dtype=np.intp)
+    rpos[res] = np.arange(n)
+    cpos = np.full(len(layout.cols), -1, dtype=np.intp)
+    cpos[alg] = np.arange(n)
     use, note = directional_verdict(ctx, s)
     options = directional_options(ctx)
     source = "fmi3GetDirectionalDerivative" if use else "finite differences"
+    col_nominal = layout.nominal[alg]
+    row_nominal = np.array([layout.rows[i].nominal or 0.0 for i in res])
     for ps in s.points:
         e = ps.entries
-        err = e.error(options["ulps"]) * options["margin"]
-        g = np.zeros((res.size, alg.size))
-        bound = np.zeros((res.size, alg.size))
-        for k, (i, j) in enumerate(zip(e.rows.tolist(), e.cols.tolist())):
-            if i in rpos and j in cpos:
-                direct = use and not np.isnan(e.dd[k])
-                g[rpos[i], cpos[j]] = e.dd[k] if direct else e.fd[k]
-                bound[rpos[i], cpos[j]] = 0.0 if direct else err[k]
-        if not np.all(np.isfinite(g)):
+        inside = (rpos[e.rows] >= 0) & (cpos[e.cols] >= 0)
+        direct = use & ~np.isnan(e.dd)
+        value = np.where(direct, e.dd, e.fd)[inside]
+        if not np.all(np.isfinite(value)):
             continue  # nan-or-inf reports it
-        g = g * layout.nominal[alg][None, :]
-        bound = bound * layout.nominal[alg][None, :]
-        for a, i in enumerate(res):
-            nominal = layout.rows[i].nominal
-            biggest = np.abs(g[a]).max(initial=0.0)
-            divisor = nominal if nominal else (biggest if biggest > 0 else 1.0)
-            g[a], bound[a] = g[a] / divisor, bound[a] / divisor
-        yield _Block(ps, g, float(np.linalg.norm(np.nan_to_num(bound, posinf=np.inf))),
-                     source, note)
+        bound = np.where(direct, 0.0, np.maximum(
+            e.error(options["ulps"]) * options["margin"],
+            entry_floor(layout, e, ulps=options["ulps"])))[inside]
+        r, c = rpos[e.rows[inside]], cpos[e.cols[inside]]
+        value, bound = value * col_nominal[c], bound * col_nominal[c]
+        biggest = np.zeros(n)
+        np.maximum.at(biggest, r, np.abs(value))
+        divisor = np.where(row_nominal > 0, row_nominal, np.where(biggest > 0, biggest, 1.0))
+        value, bound = value / divisor[r], bound / divisor[r]
+        if n <= dense_up_to:
+            g = np.zeros((n, n))
+            g[r, c] = value
+            error_matrix = np.zeros((n, n))
+            error_matrix[r, c] = bound
+            error = float(np.linalg.norm(np.nan_to_num(error_matrix, posinf=np.inf)))
+        else:
+            import scipy.sparse as sp  # scipy: only for a dg/dw too large for a dense SVD
+
+            g = sp.csc_array((value, (r, c)), shape=(n, n))
+            column_error = np.bincount(c, weights=np.nan_to_num(bound, posinf=np.inf),
+                                       minlength=n)
+            error = float(column_error.max(initial=0.0))
+        yield _Block(ps, g, error, source, note)
 
 
 def _algebraic_survey(ctx: ProbeContext) -> Survey:
@@ -89,79 +108,125 @@ def _algebraic_survey(ctx: ProbeContext) -> Survey:
     return s
 
 
-def _condition(g: np.ndarray, error: float = 0.0) -> tuple[float, bool, np.ndarray]:
-    """2-norm condition number, whether numerically singular, and the direction of the
-    smallest singular value (which algebraic variables the near-singularity involves).
-    Singular: the smallest singular value is at most max(shape) * eps * largest (numpy's
-    matrix_rank criterion), or at most ``error``, the 2-norm bound of the measurement error
-    of ``g`` (Weyl: a matrix that close to g may be singular)."""
-    if not np.all(np.isfinite(g)):
-        return np.inf, True, np.zeros(g.shape[1])
-    _, sv, vt = np.linalg.svd(g)
-    if sv[0] == 0:
-        return np.inf, True, vt[-1]
-    singular = sv[-1] <= max(sv[0] * max(g.shape) * numdiff.EPS, error)
-    return (float(sv[0] / sv[-1]) if sv[-1] > 0 else np.inf), bool(singular), vt[-1]
+@dataclass
+class _Judged:
+    """The condition of one block: the number, whether singular, the direction, the block."""
+
+    block: _Block
+    condition: float
+    singular: bool
+    direction: np.ndarray
+    details: dict[str, Any]
 
 
-def _worst_condition(ctx: ProbeContext, s: Survey, singular: bool) -> tuple | None:
+def _condition(b: _Block, *, dense_up_to: int, seed: int) -> _Judged:
+    """The condition number of the block, whether it is numerically singular, and the
+    direction of near-singularity (which algebraic variables it involves). Singular: the
+    smallest singular value is at most max(shape) * eps * largest (numpy's matrix_rank
+    criterion), or at most ``error``, the bound of the measurement error of ``g`` (Weyl: a
+    matrix that close to g may be singular). Above ``dense_up_to`` rows the same criterion in
+    the 1-norm, from the sparse LU and the Hager-Higham estimate of the inverse's norm
+    (numerics.conditioning), after the structural rank of the nonzeros (maximum matching): a
+    pattern that cannot have full rank is singular whatever its values."""
+    g, n = b.g, b.g.shape[0]
+    if n > dense_up_to:
+        import scipy.sparse as sp  # scipy: only for a dg/dw too large for a dense SVD
+
+        from ..numerics.graphs.matching import maximum_matching  # scipy's csgraph: as above
+
+        nonzero = sp.csr_array(g)
+        nonzero.eliminate_zeros()   # stored: an edge (an entry measured as exactly 0 is none)
+        matched = maximum_matching(nonzero)
+        if matched.size < n:
+            direction = np.zeros(n)
+            direction[matched.col_to_row < 0] = 1.0
+            return _Judged(b, np.inf, True, direction / np.linalg.norm(direction), {
+                "method": "structural rank (maximum matching of the nonzeros)",
+                "structural_rank": matched.size})
+    found = conditioning(g, dense_up_to=dense_up_to, seed=seed)
+    if found.largest == 0:
+        return _Judged(b, np.inf, True, found.direction, _sparse_details(found))
+    singular = found.smallest <= max(found.largest * n * numdiff.EPS, b.error)
+    return _Judged(b, found.condition, bool(singular), found.direction, _sparse_details(found))
+
+
+def _sparse_details(found: Any) -> dict[str, Any]:
+    """What the evidence says about a sparse estimate (nothing for the dense SVD, whose
+    evidence is as it always was)."""
+    if found.norm == 2:
+        return {}
+    return {"method": found.method, "norm": "1-norm", "lu_nonzeros": found.factor_nonzeros}
+
+
+def _worst_condition(ctx: ProbeContext, s: Survey, singular: bool, dense_up_to: int
+                     ) -> _Judged | None:
     worst = None
-    for b in _algebraic_blocks(ctx, s):
-        cond, is_singular, direction = _condition(b.g, b.error)
-        if is_singular == singular and (worst is None or cond > worst[1]):
-            worst = (b.ps, cond, direction, b.source, b.g.shape[0], b.note, b.error)
+    for b in _algebraic_blocks(ctx, s, dense_up_to):
+        judged = _condition(b, dense_up_to=dense_up_to, seed=ctx.seed)
+        if judged.singular == singular and (worst is None or
+                                            judged.condition > worst.condition):
+            worst = judged
     return worst
 
 
-def _condition_violation(s: Survey, found: tuple, message: str, **extra) -> Violation:
+def _condition_violation(s: Survey, found: _Judged, message: str, **extra) -> Violation:
     layout = s.layout
     assert layout is not None
-    ps, cond, direction, source, n, note, error = found
+    b = found.block
     alg = layout.indices("algebraic")
+    direction = found.direction
     order = np.argsort(-np.abs(direction))[:5]
     involved = [layout.cols[alg[k]].name for k in order if abs(direction[k]) > 1e-3]
     res = layout.indices("residual", of="rows")
-    if source == "finite differences":
-        extra["measurement_error"] = error
-    if note:
-        extra["note"] = note
+    if b.source == "finite differences":
+        extra["measurement_error"] = b.error
+    if b.note:
+        extra["note"] = b.note
+    cond = found.condition
     return Violation(message, layout.rows[res[0]].location, evidence(
-        condition_number=cond if np.isfinite(cond) else "inf", size=n, source=source,
-        scale="columns by the algebraic variables' nominal values, rows by the residuals' "
-        "nominal values or else equilibrated", involved=involved, **extra,
-        point=point_evidence(layout, ps)))
+        condition_number=cond if np.isfinite(cond) else "inf", size=b.g.shape[0],
+        source=b.source, scale="columns by the algebraic variables' nominal values, rows by "
+        "the residuals' nominal values or else equilibrated", involved=involved,
+        **found.details, **extra, point=point_evidence(layout, b.ps)))
 
 
-def algebraic_jacobian_ill_conditioned(ctx: ProbeContext, *, max_condition: float
-                                       ) -> Iterator[Violation]:
-    """The scaled dg/dw has a condition number above ``max_condition`` (but is not singular)."""
+def algebraic_jacobian_ill_conditioned(ctx: ProbeContext, *, max_condition: float,
+                                       dense_up_to: int) -> Iterator[Violation]:
+    """The scaled dg/dw has a condition number above ``max_condition`` (but is not singular);
+    a dense SVD up to ``dense_up_to`` algebraic variables, a sparse estimate above."""
     s = _algebraic_survey(ctx)
-    found = _worst_condition(ctx, s, singular=False)
-    if found is not None and found[1] > max_condition:
+    found = _worst_condition(ctx, s, False, dense_up_to)
+    if found is not None and found.condition > max_condition:
         yield _condition_violation(
             s, found, "dg/dw, the Jacobian of the residuals with respect to the algebraic "
             "variables, is ill-conditioned: an importer's Newton iteration loses accuracy",
             threshold=max_condition)
 
 
-def algebraic_jacobian_singular(ctx: ProbeContext) -> Iterator[Violation]:
-    """The scaled dg/dw is numerically singular at a sampling point (DAE-51)."""
+def algebraic_jacobian_singular(ctx: ProbeContext, *, dense_up_to: int
+                                ) -> Iterator[Violation]:
+    """The scaled dg/dw is numerically singular at a sampling point (DAE-51); a dense SVD up
+    to ``dense_up_to`` algebraic variables, a sparse LU above."""
     s = _algebraic_survey(ctx)
-    found = _worst_condition(ctx, s, singular=True)
+    found = _worst_condition(ctx, s, True, dense_up_to)
     if found is not None:
+        n = found.block.g.shape[0]
         yield _condition_violation(
             s, found, "dg/dw, the Jacobian of the residuals with respect to the algebraic "
             "variables, is singular: the DAE does not have index 1 here",
-            threshold=f"smallest singular value <= {found[4]} * eps * largest"
-            + (" or <= the measurement error" if found[3] == "finite differences" else ""))
+            threshold=f"smallest singular value <= {n} * eps * largest"
+            + (" or <= the measurement error" if found.block.source == "finite differences"
+               else ""))
 
 
 # ------------------------------------------------------------------------- ODE against DAE
 
 def ode_dae_inconsistent(ctx: ProbeContext, *, rtol: float, margin: float,
-                         ulps: float, max_iterations: int) -> Iterator[Violation]:
+                         ulps: float, max_iterations: int, dense_up_to: int
+                         ) -> Iterator[Violation]:
     """At the same (t, x, u), the derivatives and outputs of ODE mode equal those of DAE mode
-    at the algebraic variables that solve the residuals (DAE-42)."""
+    at the algebraic variables that solve the residuals (DAE-42). Newton's dg/dw is dense up
+    to ``dense_up_to`` algebraic variables, coloured and sparse above."""
     s = surveyed(ctx)
     if ctx.ode is None:
         failure = ctx.facts.get("ode_error")
@@ -176,10 +241,12 @@ def ode_dae_inconsistent(ctx: ProbeContext, *, rtol: float, margin: float,
     res = [layout.rows[i].vr for i in res_i]
     cmp = [layout.rows[i].vr for i in cmp_i]
     alg = [layout.cols[j].vr for j in alg_j]
+    sparse = sparse_dgdw(layout, res_i, alg_j) if alg_j.size > dense_up_to else None
     worst = None
     for ps in s.points:
         found = compare_modes(ctx, s, ps, res_i, cmp_i, alg_j, res, cmp, alg, rtol=rtol,
-                              margin=margin, ulps=ulps, max_iterations=max_iterations)
+                              margin=margin, ulps=ulps, max_iterations=max_iterations,
+                              sparse=sparse)
         if found is not None and (worst is None or found[0] > worst[0]):
             worst = found
     if worst is not None:

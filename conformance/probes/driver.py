@@ -8,9 +8,16 @@ finding naming the probe and the FMI call in progress, read from the shared
 endurance probes, also says after how many FMI calls). Each new worker is told the probes
 during which an earlier one died (``ProbeJob.died``). The run it serves
 (``conformance.probes.runner``) holds the outcome and the limits; its docstring gives the policy.
+
+What a death or a limit means, the binary's finding or lsdae's own limit, is decided by
+:class:`.deaths.Diagnosis` (its docstring gives the rule: a limit reached while no FMI call was
+in progress, or while only a short one was, is lsdae's own). For lsdae's own limits the probe is
+listed as not run, with the limit and the reason, and the worker that was stopped for it is
+replaced by a new one for the remaining probes, which the reason says too.
 """
 from __future__ import annotations
 
+import logging
 import os
 import pickle
 import subprocess
@@ -22,24 +29,23 @@ from typing import Any
 
 from ..report.catalogue import RuleSpec
 from ..report.findings import Location, Violation, evidence
-from ..runtime.callrecord import CallCounts, CallRecord
+from ..runtime.callrecord import CallRecord
 from ..runtime.protocol import Job, violation_from_json
 from ..runtime.supervisor import WorkerProcess
+from .deaths import CRASHED, MEMORY, NOT_LOADABLE, TIMED_OUT, CallClock, Diagnosis
 from .job import ENTRY, ProbeJob
-from .registry import ENDURANCE as COUNTED
 
-CRASHED, TIMED_OUT, MEMORY, NOT_LOADABLE = (
-    "binary-crashed", "binary-timed-out", "binary-memory-limit", "binary-not-loadable")
 RUNNER_RULES = (CRASHED, TIMED_OUT, MEMORY, NOT_LOADABLE)
-MEMORY_FRACTION = 0.8        # a death at this share of the address-space limit is "memory"
-STDERR_TAIL = 1500
 PACKAGE_ROOT = str(Path(__file__).resolve().parents[2])
+
+log = logging.getLogger(__name__)
 
 
 @dataclass
 class _Death:
     kind: str  # "end", "died", "timeout", "fmu-timeout", "load-failed", "fatal", "worker-error"
     probe: str = ""
+    own: str = ""   # lsdae's own limit was reached (no FMI call in progress): the reason
 
 
 class Driver:
@@ -53,11 +59,14 @@ class Driver:
         self.fmu_deadline = time.monotonic() + self.limits.fmu_seconds
         self.blocked: list[str] = []   # FMI functions that hung: not called again
         self.died: list[str] = []      # probes during which a worker died or was killed
+        self.diagnosis = Diagnosis(self)
 
     def drive(self) -> None:
-        restarts = 0
+        restarts, own = 0, 0
         while True:
             result = self._one_worker()
+            if result.own:
+                self._not_run_own(result)
             done = {c for c, _ in self.run.outcome.skipped} | self.run.outcome.run
             self.remaining = [r for r in self.remaining if r.code not in done]
             if result.kind == "end":
@@ -70,19 +79,22 @@ class Driver:
             if result.kind == "fatal" and not self.remaining:
                 return
             if result.kind == "fmu-timeout":
-                self.run.skip(self.remaining, f"the per-FMU time limit of "
+                self.run.skip(self.remaining, result.own or f"the per-FMU time limit of "
                               f"{self.limits.fmu_seconds:g} s was reached", failed=True)
                 return
             if result.probe in ("setup", ""):
-                self.run.skip(self.remaining, "the worker failed before the probes could run "
-                              "(see the findings)", failed=True)
+                self.run.skip(self.remaining, result.own or "the worker failed before the "
+                              "probes could run (see the findings)", failed=True)
                 return
             if not self.remaining:
                 return
             restarts += 1
+            own += bool(result.own)
             if restarts > self.limits.max_restarts:
                 self.run.skip(self.remaining, f"the worker was restarted "
-                              f"{self.limits.max_restarts} times", failed=True)
+                              f"{self.limits.max_restarts} times" + (
+                                  f", {own} of them after lsdae's own limits" if own else ""),
+                              failed=True)
                 return
 
     # -- one worker process --------------------------------------------------------------
@@ -116,16 +128,20 @@ class Driver:
     def _one_worker(self) -> _Death:
         proc = self._start()
         watch = WorkerProcess(proc)
+        clock = CallClock(self.call_file)
         current = "setup"
         step_deadline = time.monotonic() + self.limits.probe_seconds
         try:
             while True:
+                clock.tick()
                 now = time.monotonic()
                 if now >= self.fmu_deadline or now >= step_deadline:
                     per_fmu = now >= self.fmu_deadline
                     watch.kill()
-                    probe = self._timed_out(current, per_fmu)
-                    return _Death("fmu-timeout" if per_fmu else "timeout", probe)
+                    probe_time = now - (step_deadline - self.limits.probe_seconds)
+                    probe, own = self.diagnosis.timed_out(current, per_fmu, clock.running(),
+                                                          probe_time)
+                    return _Death("fmu-timeout" if per_fmu else "timeout", probe, own)
                 events, eof = watch.read(min(step_deadline, self.fmu_deadline) - now)
                 for event in events:
                     kind = event.get("event")
@@ -133,10 +149,12 @@ class Driver:
                         current = str(event.get("code", ""))
                         step_deadline = time.monotonic() + self.limits.probe_seconds
                     elif kind == "done":
+                        self._stats(str(event.get("code", "")), event.get("stats"))
                         self._done(event)
                         current = ""
                         step_deadline = time.monotonic() + self.limits.probe_seconds
                     elif kind == "ready":
+                        self._stats("setup", event.get("stats"))
                         watch.baseline = event.get("memory") or {}
                         for key, value in (event.get("info") or {}).items():
                             self.run.outcome.info.setdefault(key, value)
@@ -163,9 +181,24 @@ class Driver:
                         return _Death("end")
                 if eof:  # the channel closed before "end": whatever the exit status, a death
                     watch.finish()
-                    return _Death("died", self._died(current, watch))
+                    return _Death("died", *self.diagnosis.died(current, watch))
         finally:
             watch.kill()
+
+    def _stats(self, step: str, stats: Any) -> None:
+        """What one step of the worker cost (seconds, FMI calls, peak resident bytes): kept
+        in the outcome and logged (``lsdae check -v``), never in the report."""
+        if not isinstance(stats, dict):
+            return
+        entry = {"probe": step, **{k: stats.get(k) for k in ("seconds", "calls", "fmi_seconds",
+                                                                 "peak_rss")}}
+        self.run.outcome.stats.append(entry)
+        peak = entry["peak_rss"]
+        log.debug("%s: %.3f s (%.3f s in the binary), %s FMI calls, peak resident %s",
+                  self.run.names(step), float(entry["seconds"] or 0.0),
+                  float(entry["fmi_seconds"] or 0.0), entry["calls"],
+                  f"{peak / (1 << 20):.0f} MiB" if isinstance(peak, int) else "unknown",
+                  extra={"probe_stats": entry})
 
     def _done(self, event: dict[str, Any]) -> None:
         code = str(event.get("code"))
@@ -182,89 +215,15 @@ class Driver:
             if key not in ("points", "seed"):
                 outcome.info[key] = value
 
-    # -- findings --------------------------------------------------------------------------
+    def _not_run_own(self, death: _Death) -> None:
+        """The probe a limit of lsdae's own stopped is not run, with the reason, and whether
+        a new worker takes over the probes after it (the one stopped cannot go on)."""
+        rule = next((r for r in self.run.rules if r.code == death.probe), None)
+        if rule is None:
+            return
+        done = {c for c, _ in self.run.outcome.skipped} | self.run.outcome.run
+        after = [r for r in self.remaining if r.code not in done and r.code != rule.code]
+        goes_on = after and death.kind in ("timeout", "died")
+        self.run.skip([rule], death.own + ("; the worker was stopped, and a new one runs the "
+                                           "probes after it" if goes_on else ""), failed=True)
 
-    def _record(self) -> tuple[str, str, bool]:
-        try:
-            with open(self.call_file, "rb") as fh:
-                return CallRecord.parse(fh.read(CallRecord.SIZE))
-        except OSError:
-            return "", "", False
-
-    def _stderr(self) -> str:
-        try:
-            with open(self.stderr_file, "rb") as fh:
-                fh.seek(max(0, os.path.getsize(self.stderr_file) - STDERR_TAIL))
-                text = fh.read().decode("utf-8", "replace").strip()
-        except OSError:
-            return ""
-        # paths of the temporary directory would make two reports of one FMU differ
-        return text.replace(os.path.join(self.tmp, "fmu") + os.sep, "").replace(self.tmp, "<tmp>")
-
-    def _stderr_evidence(self) -> dict[str, str]:
-        text = self._stderr()
-        return {"stderr": text} if text else {}
-
-    def _context(self, current: str) -> tuple[str, str, str, dict[str, Any]]:
-        probe, call, in_progress = self._record()
-        probe = probe or current
-        if not call:
-            where = "before any FMI call"
-        elif in_progress:
-            where = f"during {call}"
-        else:
-            where = f"after {call} had returned"
-        facts: dict[str, Any] = {"probe": probe, "call": call or None,
-                                 "call_in_progress": in_progress}
-        if call and probe in COUNTED:
-            counts = self._counts()
-            total, in_probe = counts.completed(in_progress), counts.completed_in_probe(in_progress)
-            where += f", after {in_probe:,} FMI calls in this probe ({total:,} in this worker)"
-            facts.update(call_count=total, calls_in_probe=in_probe)
-        if probe in self.run.by_name or any(r.code == probe for r in self.run.rules):
-            self.run.outcome.run.add(probe)
-        if probe:
-            self.died.append(probe)
-        return probe, call, where, facts
-
-    def _counts(self) -> CallCounts:
-        try:
-            with open(self.call_file, "rb") as fh:
-                return CallRecord.counts(fh.read(CallRecord.SIZE))
-        except OSError:
-            return CallCounts(0, 0)
-
-    def _timed_out(self, current: str, per_fmu: bool) -> str:
-        probe, call, where, facts = self._context(current)
-        if call and facts["call_in_progress"]:
-            self.blocked.append(call)
-        limit = self.limits.fmu_seconds if per_fmu else self.limits.probe_seconds
-        scope = "per FMU" if per_fmu else "per probe"
-        self.run.emit(TIMED_OUT, Violation(
-            f"the binary did not respond within the {limit:g} s limit {scope}: stopped "
-            f"{where}, in {self.run.names(probe)}", Location(file=self.run.binary),
-            evidence(facts, limit_seconds=limit, limit=scope, **self._stderr_evidence()),
-            subject=call or probe))
-        return probe
-
-    def _died(self, current: str, watch: WorkerProcess) -> str:
-        probe, call, where, facts = self._context(current)
-        how = watch.how()
-        if probe == "setup" and not call:  # died before touching the binary: our defect
-            self.run.emit("internal-error", Violation(
-                f"the probe worker failed before loading the binary ({how}): "
-                f"{(self._stderr().splitlines() or ['no message'])[-1]}",
-                evidence=evidence(exit=how, **self._stderr_evidence())))
-            return probe
-        ev = evidence(facts, exit=how, **self._stderr_evidence())
-        limit_mib = int(self.limits.address_space_mib)
-        if watch.memory_error or watch.peak() >= MEMORY_FRACTION * (limit_mib << 20):
-            self.run.emit(MEMORY, Violation(
-                f"the binary exhausted the {limit_mib} MiB address-space limit {where}, in "
-                f"{self.run.names(probe)} ({how})", Location(file=self.run.binary),
-                ev + evidence(limit_mib=limit_mib), subject=call or probe))
-        else:
-            self.run.emit(CRASHED, Violation(
-                f"the binary crashed ({how}) {where}, in {self.run.names(probe)}",
-                Location(file=self.run.binary), ev, subject=call or probe))
-        return probe

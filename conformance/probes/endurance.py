@@ -18,7 +18,6 @@ Every probe runs in the worker process like the others and yields violations.
 """
 from __future__ import annotations
 
-import math
 import time
 from collections.abc import Iterator, Sequence
 from typing import Any
@@ -30,7 +29,7 @@ from ..numerics.growth import growth
 from ..runtime.instance import Instance
 from ..runtime.layout import Layout
 from .api import Point, ProbeContext, ProbeSkipped
-from .common import close, dae_of, layout_of, root_location, unknowns_of
+from .common import dae_of, layout_of, root_location, unknowns_of
 from .endurance_run import level_of, path_run, remember_settings
 
 RUN_CODES = ("DAE760", "DAE761")    # the probes that judge the path run
@@ -43,18 +42,23 @@ KIB = 1024
 
 
 def evaluation_fails_late(ctx: ProbeContext, *, calls_quick: int, calls_long: int,
-                          seconds_quick: float, seconds_long: float, samples: int,
+                          values_quick: int, values_long: int, seconds_quick: float,
+                          seconds_long: float, samples: int,
                           max_growth_mib: float) -> Iterator[Violation]:
     """Thousands of evaluations along a path on one instance in DAE mode (the budget of the
-    level: ``calls_<level>`` FMI calls, at most ``seconds_<level>`` seconds) never start to
-    fail. Carries the settings of the path run, which ``memory-grows`` judges too (``samples``
-    memory samples; the run stops when memory grew by ``max_growth_mib``)."""
+    level: ``calls_<level>`` FMI calls and ``values_<level>`` values passed; ``seconds_<level>``
+    is a safety net whose end makes the run's rules not run) never start to fail. Carries the
+    settings of the path run, which ``memory-grows`` judges too (``samples`` memory samples;
+    the run stops when memory grew by ``max_growth_mib``)."""
     remember_settings(ctx, {"calls_quick": calls_quick, "calls_long": calls_long,
+                            "values_quick": values_quick, "values_long": values_long,
                             "seconds_quick": seconds_quick, "seconds_long": seconds_long,
                             "samples": samples, "max_growth_mib": max_growth_mib})
     run = path_run(ctx, RUN_CODES)
     failure = run.failure
     if failure is None:
+        if run.out_of_time():
+            raise ProbeSkipped(run.out_of_time())
         return
     if failure["fresh_instance"] != "ok" and not failure["fresh_instance"].startswith("not"):
         raise ProbeSkipped(
@@ -86,6 +90,8 @@ def memory_grows(ctx: ProbeContext, *, bytes_per_call_quick: float, bytes_per_ca
     run = path_run(ctx, RUN_CODES)
     if run.memory_note:
         raise ProbeSkipped(run.memory_note)
+    if run.out_of_time():
+        raise ProbeSkipped(run.out_of_time())
     found = growth([c for c, _ in run.samples], [r for _, r in run.samples])
     if found is None:
         raise ProbeSkipped(f"the path run ended after {run.calls:,} FMI calls ({run.stopped}): "
@@ -128,18 +134,30 @@ class _Scenarios:
         self.unknowns = unknowns_of(layout)
         self.initial = list(dict.fromkeys([*layout.states, *layout.algebraic, *self.unknowns]))
         self.found: list[dict[str, Any]] = []
+        self._scale_of: dict[int, tuple[Sequence[int], np.ndarray]] = {}  # by the list's id
 
     def differences(self, vrs: Sequence[int], expected: np.ndarray, actual: np.ndarray
                     ) -> list[dict[str, Any]]:
+        """The values that differ beyond ``atol + rtol * max(nominal, |values|)`` (common.close,
+        on whole arrays: a model of 10,000 variables is compared at once)."""
+        a = np.asarray(expected, dtype=float)
+        b = np.asarray(actual, dtype=float)
+        scale = self._scales(vrs)
+        with np.errstate(invalid="ignore"):
+            off = np.isfinite(a) & np.isfinite(b) & ~(  # non-finite values: nan-or-inf's
+                np.abs(a - b) <= self.atol + self.rtol * np.maximum(
+                    scale, np.maximum(np.abs(a), np.abs(b))))
         out = []
-        for vr, a, b in zip(vrs, expected, actual):
-            a, b = float(a), float(b)
-            if not (math.isfinite(a) and math.isfinite(b)):
-                continue  # nan-or-inf
-            if not close(a, b, rtol=self.rtol, atol=self.atol, scale=self.layout.scale(vr)):
-                out.append({"variable": self.layout.name(vr), "expected": a, "actual": b,
-                            "difference": abs(a - b)})
+        for k in np.flatnonzero(off).tolist():
+            out.append({"variable": self.layout.name(vrs[k]), "expected": float(a[k]),
+                        "actual": float(b[k]), "difference": abs(float(a[k]) - float(b[k]))})
         return out
+
+    def _scales(self, vrs: Sequence[int]) -> np.ndarray:
+        key = id(vrs)
+        if key not in self._scale_of:
+            self._scale_of[key] = (vrs, np.array([self.layout.scale(vr) for vr in vrs]))
+        return self._scale_of[key][1]
 
     def compare(self, kind: str, scenario: str, what: str, vrs: Sequence[int],
                 expected: np.ndarray, actual: np.ndarray, **more: Any) -> bool:
@@ -156,9 +174,10 @@ def instances_not_independent(ctx: ProbeContext, *, cycles_quick: int, cycles_lo
                               seconds_quick: float, seconds_long: float, rtol: float,
                               atol: float) -> Iterator[Violation]:
     """Instances of one FMU do not share state: a second instance beside the first, the two
-    set to different points in turn, and ``cycles_<level>`` instantiate/free cycles (at most
-    ``seconds_<level>`` seconds) give the values of the first instance at the same point
-    (after initialisation, and at two sampled points), within ``atol + rtol * nominal``. An
+    set to different points in turn, and ``cycles_<level>`` instantiate/free cycles give the
+    values of the first instance at the same point (after initialisation, and at two sampled
+    points), within ``atol + rtol * nominal``. ``seconds_<level>`` is a safety net: when it
+    ends the cycles before a difference is found, the probe is not run (time budget). An
     instance that cannot repeat its own values (P, Q, P) is ``evaluation-not-repeatable``'s
     finding: the probe is skipped then."""
     level = level_of(ctx)
@@ -182,7 +201,12 @@ def instances_not_independent(ctx: ProbeContext, *, cycles_quick: int, cycles_lo
                                "instances")
         _side_by_side(ctx, s, first, p, q, initial, at_p, at_q)
         deadline = time.monotonic() + seconds
-        while done < cycles and not s.found and time.monotonic() < deadline:
+        while done < cycles and not s.found:
+            if time.monotonic() >= deadline:  # the safety net: the verdict would be partial
+                raise ProbeSkipped(
+                    f"time budget: {done} of {cycles} instantiate/free cycles were made when "
+                    f"lsdae's wall-clock safety net (seconds_{level} = {seconds:g} s) ran out: "
+                    "a faster machine would have made them all, so no verdict")
             done += 1
             _cycle(ctx, s, p, initial, at_p, done)
         if not s.found:

@@ -10,6 +10,12 @@ samples the worker's resident memory (VmRSS, Linux). The first call that fails e
 the same path point is then tried on a fresh instance, which tells a failure that comes with
 use from one that belongs to the point.
 
+The budget is counted, never timed, so that the run, and every verdict on it, is the same on
+every machine: ``calls_<level>`` FMI calls, and ``values_<level>`` values set and read (the
+lengths of the arrays a step passes), which keeps a model of 10,000 variables from taking a
+thousand times longer than a small one. The wall clock (``seconds_<level>``) is a safety net
+only: a run it stops ends as "time", and the rules that judge the run are then not run.
+
 The run is made once per worker and kept in ``ctx.facts`` so that ``evaluation-fails-late``
 and ``memory-grows`` judge the same run; its settings are the options of
 ``evaluation-fails-late`` (the catalogue's when that rule did not run first). A worker that
@@ -23,6 +29,8 @@ import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
+
+import numpy as np
 
 from ..report.catalogue import default_catalogue
 from ..runtime.child import memory_info
@@ -43,13 +51,15 @@ class RunSettings:
 
     level: str
     calls: int
-    seconds: float
+    values: int          # values set and read along the path (the arrays' lengths)
+    seconds: float       # the safety net: a run it stops is not judged
     samples: int
     max_growth_mib: float
 
     @classmethod
     def from_options(cls, level: str, options: dict[str, Any]) -> RunSettings:
         return cls(level=level, calls=int(options[f"calls_{level}"]),
+                   values=int(options[f"values_{level}"]),
                    seconds=float(options[f"seconds_{level}"]), samples=int(options["samples"]),
                    max_growth_mib=float(options["max_growth_mib"]))
 
@@ -66,13 +76,23 @@ class PathRun:
     failure: dict[str, Any] | None = None
     samples: list[tuple[int, int]] = field(default_factory=list)  # (calls so far, VmRSS bytes)
     memory_note: str = ""           # why there are no memory samples
+    budget_calls: int = 0           # the FMI calls the budget allows this model (see _Walk)
 
     def info(self) -> dict[str, Any]:
         """The summary for the report's ``info["endurance"]`` (no memory figures: they differ
         from run to run)."""
         return {"level": self.settings.level, "path_calls": self.calls,
                 "path_steps": self.steps, "laps": self.laps, "stopped": self.stopped,
-                "budget_calls": self.settings.calls}
+                "budget_calls": self.budget_calls}
+
+    def out_of_time(self) -> str:
+        """Why no rule judges a run the safety net stopped ("" when it did not)."""
+        if self.stopped != "time":
+            return ""
+        return (f"time budget: the path run was stopped after {self.calls:,} of "
+                f"{self.budget_calls:,} FMI calls by lsdae's wall-clock safety net "
+                f"(seconds_{self.settings.level} = {self.settings.seconds:g} s of "
+                f"{SETTINGS_RULE}): a faster machine would have gone on, so no verdict")
 
 
 def level_of(ctx: ProbeContext) -> str:
@@ -128,10 +148,11 @@ def lap_points(points: Sequence[Point], steps: int = SEGMENT_STEPS) -> list[Poin
     ring = [*points, points[0]] if len(points) > 1 else list(points)
     out = []
     for a, b in itertools.pairwise(ring):
+        va = np.array([a.values[vr] for vr in keys], dtype=float)
+        vb = np.array([b.values.get(vr, a.values[vr]) for vr in keys], dtype=float)
         for k in range(steps):
             s = k / steps
-            values = {vr: (1 - s) * a.values[vr] + s * b.values.get(vr, a.values[vr])
-                      for vr in keys}
+            values = dict(zip(keys, ((1 - s) * va + s * vb).tolist()))
             out.append(Point((1 - s) * a.t + s * b.t, values, f"{a.label}>{b.label}@{k}"))
     return out or [points[0]]
 
@@ -149,8 +170,19 @@ class _Walk:
         self.layout: Layout = layout_of(ctx)
         self.library: Any = ctx.facts["library"]
         self.run = PathRun(settings)
-        self.watch = list(dict.fromkeys([*self.layout.residuals, *self.layout.outputs]))
+        self.watch = tuple(dict.fromkeys([*self.layout.residuals, *self.layout.outputs]))
         self.nx = len(self.layout.states)
+        self.run.budget_calls = self._budget_calls()
+
+    def _budget_calls(self) -> int:
+        """The FMI calls the budget allows: ``calls``, or fewer when the steps' arrays are so
+        long that ``values`` runs out first (a count from the layout, not a clock)."""
+        layout, nx = self.layout, self.nx
+        knowns = len(layout.algebraic) + len(layout.inputs)
+        calls_per_step = 1 + 2 * (nx > 0) + (knowns > 0) + (len(self.watch) > 0)
+        values_per_step = max(1, 2 * nx + knowns + len(self.watch))
+        steps = max(1, self.settings.values // values_per_step)
+        return min(self.settings.calls, steps * calls_per_step)
 
     def _step(self, inst: Instance, point: Point) -> None:
         inst.set_point(point)
@@ -171,7 +203,8 @@ class _Walk:
         run, settings = self.run, self.settings
         first = self.library.calls
         deadline = time.monotonic() + settings.seconds
-        interval = max(1, settings.calls // max(1, settings.samples))
+        budget = run.budget_calls
+        interval = max(1, budget // max(1, settings.samples))
         next_sample = 0
         limit = settings.max_growth_mib * (1 << 20)
         if resident_bytes() is None:
@@ -187,10 +220,10 @@ class _Walk:
                             run.stopped = "memory"
                             break
                     next_sample += interval
-                if run.calls >= settings.calls:
+                if run.calls >= budget:
                     run.stopped = "budget"
                     break
-                if time.monotonic() > deadline:
+                if time.monotonic() > deadline:  # the safety net: no verdict on this run
                     run.stopped = "time"
                     break
                 try:

@@ -2,7 +2,10 @@
 
 Each entry ``J_ij`` is compared in units of the row's scale ``S_i = sum_j |J_ij| * nominal_j``;
 a difference counts only when it exceeds ``margin`` times the finite-difference error estimate
-plus ``rtol * S_i / nominal_j``. The tolerances are the calling rule's catalogue options.
+plus ``rtol * S_i / nominal_j``, and never below the absolute floor of the entry
+(:func:`conformance.numerics.measure.floor`: ``TINY / h_j``, and where the row's finite
+differences are all zero or underflow ``ulps * eps * nominal_i / h_j``, since nothing was
+resolved below that). The tolerances are the calling rule's catalogue options.
 
 :func:`directional_verdict` says whether the FMU's directional derivatives may be used by
 other verdicts (dg/dw) and by the simulation: only when the survey confirmed them, judged with
@@ -45,8 +48,14 @@ def compared_entries(layout: JacobianLayout, e, which: str, *, rtol: float, marg
     every measured entry at one point (each of shape (nnz,))."""
     fmu = e.dd if which == "dd" else e.adj
     diff, tol, err, scale = measure.disagreement(e, fmu, layout.nominal, len(layout.rows),
-                                                 rtol=rtol, margin=margin, ulps=ulps)
+                                                 rtol=rtol, margin=margin, ulps=ulps,
+                                                 row_nominal=layout.row_nominal)
     return fmu, diff, tol, err, scale
+
+
+def entry_floor(layout: JacobianLayout, e, *, ulps: float) -> np.ndarray:
+    """The absolute floor of every entry at one point (units of ``fd``), shape (k,)."""
+    return measure.floor(e, len(layout.rows), ulps=ulps, row_nominal=layout.row_nominal)
 
 
 def closest_entries(s: Survey, which: str, *, rtol: float, margin: float, ulps: float,
@@ -55,21 +64,31 @@ def closest_entries(s: Survey, which: str, *, rtol: float, margin: float, ulps: 
     tolerance for passing checks too): (entry, |FMU - FD|, tolerance), worst first."""
     layout = s.layout
     assert layout is not None
-    best: dict[tuple[int, int], tuple[float, float, float]] = {}
+    n = len(layout.cols)
+    parts: list[tuple[np.ndarray, ...]] = []
     for ps in s.points:
         e = ps.entries
         if (e.dd if which == "dd" else e.adj) is None:
             continue
-        fmu, diff, tol, _, _ = compared_entries(layout, e, which, rtol=rtol, margin=margin,
-                                                ulps=ulps)
+        _, diff, tol, _, _ = compared_entries(layout, e, which, rtol=rtol, margin=margin,
+                                              ulps=ulps)
         ok = np.isfinite(diff) & (tol > 0)
-        for k in np.flatnonzero(ok):
-            key = (int(e.rows[k]), int(e.cols[k]))
-            ratio = float(diff[k] / tol[k])
-            if key not in best or ratio > best[key][0]:
-                best[key] = (ratio, float(diff[k]), float(tol[k]))
-    ranked = sorted(best.items(), key=lambda kv: -kv[1][0])[:limit]
-    return [(layout.entry(i, j), d, t) for (i, j), (_, d, t) in ranked]
+        parts.append((e.rows[ok].astype(np.int64) * n + e.cols[ok], diff[ok] / tol[ok],
+                      diff[ok], tol[ok]))
+    if not parts:
+        return []
+    key, ratio, diff, tol = (np.concatenate(column) for column in zip(*parts))
+    if not key.size:
+        return []
+    order = np.arange(key.size)   # points in turn, entries in order: first seen first
+    # each entry at its worst point (the first of equal ratios), ranked worst first, entries
+    # of equal ratio in the order they were first seen
+    by_key = np.lexsort((order, -ratio, key))
+    first = by_key[np.r_[True, key[by_key][1:] != key[by_key][:-1]]]
+    _, seen = np.unique(key, return_index=True)   # sorted by key, as ``first`` is
+    ranked = first[np.lexsort((seen, -ratio[first]))][:limit]
+    return [(layout.entry(int(key[k] // n), int(key[k] % n)), float(diff[k]), float(tol[k]))
+            for k in ranked]
 
 
 def mismatched_entries(s: Survey, which: str, *, rtol: float, margin: float, ulps: float) -> dict:
@@ -84,14 +103,22 @@ def mismatched_entries(s: Survey, which: str, *, rtol: float, margin: float, ulp
         # non-finite: nan-or-inf. An adjoint as wrong as the directional derivative is a finding
         # of its own: an importer may call only one of the two functions.
         bad = np.isfinite(fmu) & np.isfinite(e.fd) & (diff > tol)
+        floor = entry_floor(layout, e, ulps=ulps) if bad.any() else None
         for k in np.flatnonzero(bad):
+            items = {"fmu": float(fmu[k]), "finite_difference": float(e.fd[k]),
+                     "error_estimate": float(err[k]), "tolerance": float(tol[k]),
+                     "row_scale": float(scale[k] * layout.nominal[e.cols[k]]),
+                     "declared": bool(e.declared[k])}
+            _note_floor(items, floor[k], margin * err[k] + rtol * scale[k])  # type: ignore
             keep_worst(worst, (int(e.rows[k]), int(e.cols[k])),
-                        float(diff[k] / tol[k]) if tol[k] > 0 else np.inf, ps,
-                        {"fmu": float(fmu[k]), "finite_difference": float(e.fd[k]),
-                         "error_estimate": float(err[k]), "tolerance": float(tol[k]),
-                         "row_scale": float(scale[k] * layout.nominal[e.cols[k]]),
-                         "declared": bool(e.declared[k])})
+                       float(diff[k] / tol[k]) if tol[k] > 0 else np.inf, ps, items)
     return worst
+
+
+def _note_floor(items: dict, floor: float, scaled: float) -> None:
+    """Say in the evidence when the absolute floor, not the scaled tolerance, decided."""
+    if floor > scaled:
+        items["tolerance_floor"] = float(floor)
 
 
 def undeclared_entries(s: Survey, *, rtol: float, margin: float, ulps: float) -> dict:
@@ -108,16 +135,18 @@ def undeclared_entries(s: Survey, *, rtol: float, margin: float, ulps: float) ->
         nominal = layout.nominal[e.cols]
         err = e.error(ulps)
         size = np.abs(e.fd) * nominal
-        tol = margin * err * nominal + rtol * scale
+        scaled = margin * err * nominal + rtol * scale
+        floor = entry_floor(layout, e, ulps=ulps) * nominal
+        tol = np.maximum(scaled, floor)
         clear = ~e.declared & ~e.zero & np.isfinite(size) & (size > tol)
         for k in np.flatnonzero(clear):
             if not layout.rows[e.rows[k]].explicit:
                 continue
+            items = {"finite_difference": float(e.fd[k]), "error_estimate": float(err[k]),
+                     "tolerance": float(tol[k] / nominal[k]), "row_scale": float(scale[k])}
+            _note_floor(items, floor[k] / nominal[k], scaled[k] / nominal[k])
             keep_worst(worst, (int(e.rows[k]), int(e.cols[k])),
-                       float(size[k] / tol[k]) if tol[k] > 0 else np.inf, ps,
-                       {"finite_difference": float(e.fd[k]), "error_estimate": float(err[k]),
-                        "tolerance": float(tol[k] / nominal[k]),
-                        "row_scale": float(scale[k])})
+                       float(size[k] / tol[k]) if tol[k] > 0 else np.inf, ps, items)
     return worst
 
 
@@ -137,28 +166,49 @@ def kind_changes(s: Survey, kinds: Mapping[tuple[int, int], str], *, rtol: float
                  margin: float, ulps: float) -> dict[tuple[int, int], KindChange]:
     """The entries of ``kinds`` (declared, not 'dependent') whose finite differences differ
     between the points by more than ``margin`` times their two error estimates plus ``rtol``
-    times the largest row scale over ``nominal_j``: the unknown is not affine in the known."""
+    times the largest row scale over ``nominal_j`` (never less than the larger of the two
+    entries' absolute floors): the unknown is not affine in the known."""
     layout = s.layout
     assert layout is not None
-    samples: dict[tuple[int, int], list] = {}
-    for ps in s.points:
+    n = len(layout.cols)
+    wanted = np.array(sorted(i * n + j for i, j in kinds), dtype=np.int64)
+    parts: list[tuple[np.ndarray, ...]] = []
+    for p, ps in enumerate(s.points):
         e = ps.entries
-        scale = row_scale(layout, e)
-        err = e.error(ulps)
-        for k, (i, j) in enumerate(zip(e.rows.tolist(), e.cols.tolist())):
-            if (i, j) in kinds and e.declared[k] and np.isfinite(e.fd[k]):
-                samples.setdefault((i, j), []).append(
-                    (float(e.fd[k]), float(err[k]), float(scale[i] / layout.nominal[j]), ps))
+        key = e.rows.astype(np.int64) * n + e.cols
+        use = np.isin(key, wanted) & e.declared & np.isfinite(e.fd)
+        scale = row_scale(layout, e)[e.rows[use]] / layout.nominal[e.cols[use]]
+        parts.append((key[use], e.fd[use], e.error(ulps)[use], scale,
+                      np.full(int(use.sum()), p), entry_floor(layout, e, ulps=ulps)[use]))
     out: dict[tuple[int, int], KindChange] = {}
-    for (i, j), values in sorted(samples.items()):
-        hi = max(values, key=lambda v: v[0])
-        lo = min(values, key=lambda v: v[0])
-        scale = max(v[2] for v in values)
-        tol = margin * (hi[1] + lo[1]) + rtol * scale
-        if hi[0] - lo[0] > tol:
-            out[(i, j)] = KindChange(kinds[(i, j)], lo[:2] + (lo[3],), hi[:2] + (hi[3],), tol,
-                                     scale)
+    if not parts:
+        return out
+    key, fd, err, scale, point, floor = (np.concatenate(column) for column in zip(*parts))
+    if not key.size:
+        return out
+    order = np.arange(key.size)     # the points in turn: the first of equal values wins
+    hi = _first_per_key(key, -fd, order)
+    lo = _first_per_key(key, fd, order)
+    keys = key[hi]
+    largest = np.maximum.reduceat(scale[np.argsort(key, kind="stable")],
+                                  np.r_[0, np.flatnonzero(np.diff(np.sort(key))) + 1])
+    tol = np.maximum(margin * (err[hi] + err[lo]) + rtol * largest,
+                     np.maximum(floor[hi], floor[lo]))
+    for a in np.flatnonzero(fd[hi] - fd[lo] > tol):
+        i, j = divmod(int(keys[a]), n)
+        h, lw = hi[a], lo[a]
+        out[(i, j)] = KindChange(
+            kinds[(i, j)], (float(fd[lw]), float(err[lw]), s.points[point[lw]]),
+            (float(fd[h]), float(err[h]), s.points[point[h]]), float(tol[a]),
+            float(largest[a]))
     return out
+
+
+def _first_per_key(key: np.ndarray, value: np.ndarray, order: np.ndarray) -> np.ndarray:
+    """For each distinct ``key`` (ascending), the index of its smallest ``value``, the first
+    in ``order`` among equal ones."""
+    by = np.lexsort((order, value, key))
+    return by[np.r_[True, key[by][1:] != key[by][:-1]]]
 
 
 def entry_violations(s: Survey, worst: dict, message: str) -> Iterator[Violation]:

@@ -1,9 +1,10 @@
 """Fresh Initialization-Mode instances within the survey's budget (for :mod:`.initial_survey`).
 
 Every function value of the Initialization-Mode survey is a fresh instance, so the survey's
-options bound the instances and the wall-clock time over all points: :class:`InstanceCounter`
-counts both and raises :class:`OverBudget` past either; :class:`InitialPoint` evaluates one point
-with a new instance per call.
+options bound the instances over all points (a count: the budget) and the wall-clock time (a
+safety net only): :class:`InstanceCounter` counts both and raises :class:`OverBudget` past the
+first, :class:`OutOfTime` past the second; :class:`InitialPoint` evaluates one point with a new
+instance per call.
 """
 from __future__ import annotations
 
@@ -23,16 +24,21 @@ class SurveySettings:
     """The survey's options (those of ``initial-dependency-undeclared``)."""
 
     points: int           # sampling points, the start values included
-    max_instances: int    # fresh instances over all points
-    max_seconds: float    # wall-clock time over all points
+    max_instances: int    # fresh instances over all points: the budget
+    max_seconds: float    # wall-clock time over all points: a safety net only
 
 
 class OverBudget(Exception):
     pass
 
 
+class OutOfTime(OverBudget):
+    """The wall-clock safety net ran out: what was measured may not be judged."""
+
+
 class InstanceCounter:
-    """Fresh instances and seconds left; :meth:`spend` raises OverBudget past either."""
+    """Fresh instances and seconds left; :meth:`spend` raises OverBudget past the instances,
+    OutOfTime past the seconds."""
 
     def __init__(self, settings: SurveySettings):
         self.settings = settings
@@ -50,8 +56,10 @@ class InstanceCounter:
             self.why = f"max_instances = {self.settings.max_instances} ran out"
             raise OverBudget
         if time.monotonic() > self.deadline:
-            self.why = f"max_seconds = {self.settings.max_seconds:g} ran out"
-            raise OverBudget
+            self.why = (f"time budget: lsdae's wall-clock safety net (max_seconds = "
+                        f"{self.settings.max_seconds:g} s) ran out after {self.used} fresh "
+                        "instances: a faster machine would have measured more, so no verdict")
+            raise OutOfTime
         self.left -= 1
         self.used += 1
 
@@ -66,13 +74,13 @@ class InitialPoint:
     def __init__(self, factory: Factory, mode: str, layout: JacobianLayout, point: Point,
                  counter: InstanceCounter):
         self.factory, self.mode, self.layout, self.counter = factory, mode, layout, counter
-        self.rows = [r.vr for r in layout.rows]
+        self.rows = tuple(r.vr for r in layout.rows)   # tuples: converted once per call
         self.time = [j for j, c in enumerate(layout.cols) if c.role == "time"]
         self.t = point.t
         self.x = np.array([point.t if c.role == "time" else point.values[c.vr]
                            for c in layout.cols])
         self.dd_idx = np.flatnonzero(layout.dd_columns)
-        self.dd_vrs = [layout.cols[j].vr for j in self.dd_idx]
+        self.dd_vrs = tuple(layout.cols[j].vr for j in self.dd_idx)
         self.base: Any = None
 
     def _knowns(self, delta: np.ndarray) -> tuple[dict[int, float], float]:

@@ -38,6 +38,7 @@ from .initial_instances import (
     Factory,
     InitialPoint,
     InstanceCounter,
+    OutOfTime,
     OverBudget,
     SurveySettings,
 )
@@ -62,6 +63,7 @@ class InitialSurvey(Survey):
     file: str = ""
     instances: int = 0
     budget_stop: str = ""
+    out_of_time: str = ""     # the wall-clock safety net ran out: nothing may be judged
     fatal: str = ""           # a call returned fmi3Fatal: why the survey stopped
     interference: str = ""    # the instance kept open lost its values to the others
     # what confirm() needs: the instance factory and what is left of the budget
@@ -100,6 +102,8 @@ def initial_survey(ctx: ProbeContext, mode: str = "dae") -> InitialSurvey:
 def surveyed(ctx: ProbeContext, *, min_points: int = 1, mode: str = "dae") -> InitialSurvey:
     """The survey of ``mode``, or ProbeSkipped with the reason it has nothing to compare."""
     s = initial_survey(ctx, mode)
+    if s.out_of_time:
+        raise ProbeSkipped(s.out_of_time)
     if s.layout is None:
         raise ProbeSkipped(s.reason)
     if len(s.points) < min_points:
@@ -149,6 +153,9 @@ def _run(ctx: ProbeContext, settings: SurveySettings, mode: str) -> InitialSurve
         try:
             measured = _measure_point(ctx.new_initialization, mode, jl, point, result, colouring,
                                       rng, counter)
+        except OutOfTime:
+            result.out_of_time = counter.why
+            break
         except OverBudget:
             result.budget_stop = (f"{counter.why} while point {point.label} was measured, "
                                   f"after {len(result.points)} point(s)")
@@ -254,6 +261,9 @@ def confirm(s: InitialSurvey, ps: PointSurvey, j: int, *, factor: float, ulps: f
             diff = numdiff.difference(at.fun, direction, method=MEASURING.method)
         except FmiError as exc:
             _note_fatal(s, exc)
+        except OutOfTime:  # a finding it would have confirmed or cleared: no verdict at all
+            s.out_of_time = s.counter.why
+            raise ProbeSkipped(s.out_of_time) from None
         except (OverBudget, ProbeSkipped):
             pass
         else:

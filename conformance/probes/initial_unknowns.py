@@ -90,6 +90,7 @@ def _undeclared(s: InitialSurvey, *, rtol: float, margin: float, ulps: float,
     layout = s.layout
     assert layout is not None
     worst = undeclared_entries(s, rtol=rtol, margin=margin, ulps=ulps)
+    found = []   # all confirmed first: a time budget that ends a confirmation leaves no verdict
     for (i, j), w in sorted(worst.items()):
         row, col = layout.rows[i], layout.cols[j]
         again = _confirmed(s, w.ps, i, j, factor=confirm_factor, ulps=ulps)
@@ -99,7 +100,7 @@ def _undeclared(s: InitialSurvey, *, rtol: float, margin: float, ulps: float,
             continue
         w.items.update(confirmed_finite_difference=again[0], confirmed_error_estimate=again[1],
                        confirm_factor=confirm_factor)
-        yield Violation(
+        found.append(Violation(
             f"{{subject}} is clearly non-zero in Initialization Mode ({MODES.get(s.mode)}) but "
             f"the dependencies of <InitialUnknown> '{row.name}' do not list '{col.name}' "
             f"({_known_text(col.role)}): an importer that solves the initialisation from "
@@ -107,7 +108,8 @@ def _undeclared(s: InitialSurvey, *, rtol: float, margin: float, ulps: float,
             evidence(_where(s), entry=layout.entry(i, j), unknown=row.name, known=col.name,
                      known_value_reference=col.vr, known_role=col.role, **w.items,
                      point=point_evidence(layout, w.ps)),
-            subject=layout.entry(i, j))
+            subject=layout.entry(i, j)))
+    yield from found
 
 
 def _known_text(role: str) -> str:
@@ -150,6 +152,9 @@ def _kind_violated(s: InitialSurvey, *, rtol: float, margin: float, ulps: float,
     constant = {(i, j): k for i, j, k in zip(layout.pattern.rows.tolist(),
                                              layout.pattern.cols.tolist(), layout.kinds)
                 if k == "constant" and layout.rows[i].explicit}
+    if not constant:
+        return  # nothing declared constant in this mode: nothing to verify
+    found = []   # all confirmed first, as above
     for (i, j), c in kind_changes(s, constant, rtol=rtol, margin=margin, ulps=ulps).items():
         lo = _confirmed(s, c.lo[2], i, j, factor=confirm_factor, ulps=ulps)
         hi = _confirmed(s, c.hi[2], i, j, factor=confirm_factor, ulps=ulps)
@@ -157,7 +162,7 @@ def _kind_violated(s: InitialSurvey, *, rtol: float, margin: float, ulps: float,
                 c.hi[0] - c.lo[0], hi[0] - lo[0], margin * (hi[1] + lo[1]) + rtol * c.scale,
                 confirm_factor):
             continue
-        yield Violation(
+        found.append(Violation(
             f"{{subject}} is declared 'constant' by <InitialUnknown> '{layout.rows[i].name}' "
             f"but changes between points of Initialization Mode ({MODES.get(s.mode)}): the "
             "initial unknown is not affine in the known", layout.rows[i].location,
@@ -166,7 +171,8 @@ def _kind_violated(s: InitialSurvey, *, rtol: float, margin: float, ulps: float,
                      largest=c.hi[0], tolerance=c.tolerance,
                      confirmed=[lo[0], hi[0]], confirm_factor=confirm_factor,
                      points=[point_evidence(layout, c.lo[2]), point_evidence(layout, c.hi[2])]),
-            subject=layout.entry(i, j))
+            subject=layout.entry(i, j)))
+    yield from found
 
 
 def initial_directional_derivative_mismatch(ctx: ProbeContext, *, rtol: float, margin: float,

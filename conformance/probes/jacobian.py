@@ -31,6 +31,7 @@ log = logging.getLogger(__name__)
 S = TypeVar("S")
 FACT = "derivatives.survey"              # DAE mode; ODE mode under FACT + ".ode"
 MAX_PROBE_ERRORS = 200
+MAX_PLOTTED_ENTRIES = 50_000   # declared and observed entries of the published sparsity
 
 
 def fact_key(mode: str) -> str:
@@ -75,11 +76,11 @@ class _At:
 
     def __init__(self, ev: Evaluator, layout: JacobianLayout, point: Point):
         self.ev, self.layout, self.point = ev, layout, point
-        self.row_vrs = [r.vr for r in layout.rows]
+        self.row_vrs = tuple(r.vr for r in layout.rows)   # tuples: converted once per call
         self.dd_row_idx = np.flatnonzero(layout.dd_rows)
-        self.dd_row_vrs = [layout.rows[i].vr for i in self.dd_row_idx]
+        self.dd_row_vrs = tuple(layout.rows[i].vr for i in self.dd_row_idx)
         self.dd_idx = np.flatnonzero(layout.dd_columns)
-        self.dd_vrs = [layout.cols[j].vr for j in self.dd_idx]
+        self.dd_vrs = tuple(layout.cols[j].vr for j in self.dd_idx)
         self.time = [j for j, c in enumerate(layout.cols) if c.role == "time"]
         missing = [c.vr for c in layout.cols if c.role != "time" and c.vr not in point.values]
         known = dict(point.values)
@@ -87,12 +88,14 @@ class _At:
             known.update(zip(missing, ev.evaluate(point, missing).tolist()))
         self.x = np.array([point.t if c.role == "time" else float(known[c.vr])
                            for c in layout.cols])
+        self.value_cols = np.array([c.role != "time" for c in layout.cols], dtype=bool)
+        self.value_vrs = [c.vr for c in layout.cols if c.role != "time"]
         self.base = self.at(np.zeros(len(layout.cols)))
 
     def at(self, delta: np.ndarray) -> Point:
         x = self.x + delta
         t = float(x[self.time[0]]) if self.time else self.point.t
-        values = {c.vr: float(v) for c, v in zip(self.layout.cols, x) if c.role != "time"}
+        values = dict(zip(self.value_vrs, x[self.value_cols].tolist()))
         return Point(t, values, self.point.label)
 
     def fun(self, delta: np.ndarray) -> np.ndarray:
@@ -194,21 +197,31 @@ def _measure_point(ev, layout, point, result, colouring, row_colouring, rng, set
 
 
 def _publish_jacobian(ctx: ProbeContext, s: Survey) -> None:
-    """The report's ``jacobian`` plot: DAE mode's, or ODE mode's for an FMU without DAE mode."""
+    """info["jacobian"] for the HTML report's sparsity plot (DAE mode's, or ODE mode's for an
+    FMU without DAE mode): the declared entries of the rows that claim them and the entries
+    observed to move. A Jacobian of more than ``MAX_PLOTTED_ENTRIES`` of them (a plot of which
+    would show nothing) is summarised in info["jacobian_left_out"] instead: its size and
+    counts."""
     if s.layout is None or (s.mode != "dae" and ctx.dae is not None):
         return
-    observed: set[tuple[int, int]] = set()
-    for ps in s.points:
-        e = ps.entries
-        moved = ~e.zero & (e.fd != 0)
-        observed.update(zip(e.rows[moved].tolist(), e.cols[moved].tolist()))
-    p = s.layout.pattern
+    layout = s.layout
+    n = len(layout.cols)
+    moved = [(e.rows.astype(np.int64) * n + e.cols)[~e.zero & (e.fd != 0)]
+             for e in (ps.entries for ps in s.points)]
+    observed = np.unique(np.concatenate(moved)) if moved else np.zeros(0, dtype=np.int64)
+    p = layout.pattern
+    explicit = np.array([r.explicit for r in layout.rows], dtype=bool)
+    declared = explicit[p.rows] if p.nnz else np.zeros(0, dtype=bool)
     info = ctx.facts.setdefault("info", {})
+    if int(declared.sum()) + observed.size > MAX_PLOTTED_ENTRIES:
+        info["jacobian_left_out"] = {
+            "rows": len(layout.rows), "cols": n, "declared": int(declared.sum()),
+            "observed": int(observed.size), "limit": MAX_PLOTTED_ENTRIES}
+        return
     info["jacobian"] = {
-        "rows": [r.name for r in s.layout.rows], "cols": [c.name for c in s.layout.cols],
-        "declared": [[i, j] for i, j in zip(p.rows.tolist(), p.cols.tolist())
-                     if s.layout.rows[i].explicit],
-        "observed": sorted([i, j] for i, j in observed), "mode": s.mode}
+        "rows": [r.name for r in layout.rows], "cols": [c.name for c in layout.cols],
+        "declared": np.column_stack([p.rows[declared], p.cols[declared]]).tolist(),
+        "observed": np.column_stack([observed // n, observed % n]).tolist(), "mode": s.mode}
 
 
 def surveyed(ctx: ProbeContext, *, min_points: int = 1, mode: str = "dae") -> Survey:

@@ -72,6 +72,11 @@ class JacobianLayout:
     def nominal(self) -> np.ndarray:
         return np.array([c.nominal for c in self.cols])
 
+    @property
+    def row_nominal(self) -> np.ndarray:
+        """The unknowns' declared nominal values, 1 where none is declared, shape (m,)."""
+        return np.array([r.nominal or 1.0 for r in self.rows])
+
     def entry(self, i: int, j: int) -> str:
         return f"d({self.rows[i].name})/d({self.cols[j].name})"
 

@@ -2,7 +2,11 @@
 
 From the algebraic variables w that ODE mode gives at (t, x, u), solve g = 0 for w by Newton with
 the FMU's dg/dw (if the survey confirmed it, else central differences), then compare the
-derivatives and outputs of both modes, each within its tolerance and rounding noise.
+derivatives and outputs of both modes, each within its tolerance and rounding noise (never
+below the absolute floor of :mod:`conformance.numerics.floors`). Up to ``dense_up_to``
+algebraic variables dg/dw is measured column by column and solved densely; above it, it is
+measured in the groups of columns of its declared sparsity (as an importer would) and solved
+with a sparse LU: calls and memory grow with its nonzeros, not with n^2.
 """
 from __future__ import annotations
 
@@ -10,10 +14,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..numerics import numdiff
+from ..numerics import colouring as col
+from ..numerics import floors, jacobians, numdiff
 from .api import Evaluator, FmiError, Point
 from .entry_comparison import directional_verdict
 from .jacobian import PointSurvey, Survey, point_evidence, row_scale
+from .jacobian_layout import JacobianLayout
+
+SHOWN = 20   # values per evidence item (a model of 10,000 variables is not listed whole)
 
 
 @dataclass
@@ -24,9 +32,32 @@ class _Solve:
     converged: bool
 
 
+@dataclass(frozen=True)
+class Sparse:
+    """The declared sparsity of dg/dw and its column groups (a large dg/dw)."""
+
+    pattern: col.Pattern
+    colouring: col.Colouring
+
+
+def sparse_dgdw(layout: JacobianLayout, res_i: np.ndarray, alg_j: np.ndarray) -> Sparse:
+    """The declared entries of dg/dw (residual rows, algebraic columns, in their order)."""
+    p = layout.pattern
+    rpos = np.full(len(layout.rows), -1, dtype=np.intp)
+    rpos[res_i] = np.arange(res_i.size)
+    cpos = np.full(len(layout.cols), -1, dtype=np.intp)
+    cpos[alg_j] = np.arange(alg_j.size)
+    keep = (rpos[p.rows] >= 0) & (cpos[p.cols] >= 0)
+    pattern = col.Pattern((res_i.size, alg_j.size), rpos[p.rows[keep]], cpos[p.cols[keep]])
+    return Sparse(pattern, col.colour_columns(pattern))
+
+
 def _dgdw(ev: Evaluator, point: Point, res: list[int], alg: list[int], directional: bool,
-          steps: np.ndarray) -> np.ndarray:
-    """dg/dw from the FMU (column by column), or central differences without it."""
+          steps: np.ndarray, sparse: Sparse | None = None) -> object:
+    """dg/dw from the FMU (column by column), or central differences without it; with
+    ``sparse``, from one call (or difference) per group of columns, as a sparse matrix."""
+    if sparse is not None:
+        return _coloured_dgdw(ev, point, res, alg, directional, steps, sparse)
     n = len(alg)
     out = np.zeros((len(res), n))
     for k in range(n):
@@ -41,9 +72,29 @@ def _dgdw(ev: Evaluator, point: Point, res: list[int], alg: list[int], direction
     return out
 
 
+def _coloured_dgdw(ev: Evaluator, point: Point, res: list[int], alg: list[int],
+                   directional: bool, steps: np.ndarray, sparse: Sparse) -> object:
+    import scipy.sparse as sp  # scipy: only for a dg/dw too large to be dense
+
+    p = sparse.pattern
+    if directional:
+        values, _, _ = col.coloured_products(lambda seed: ev.directional(point, res, alg, seed),
+                                             p, sparse.colouring)
+    else:
+        w = np.array([point.values[vr] for vr in alg])
+
+        def fun(delta: np.ndarray) -> np.ndarray:
+            shifted = {**point.values, **dict(zip(alg, (w + delta).tolist()))}
+            return ev.evaluate(Point(point.t, shifted, point.label), res)
+
+        values = col.coloured_differences(fun, p, sparse.colouring, steps,
+                                          method="central").value
+    return sp.csc_array((np.nan_to_num(values), (p.rows, p.cols)), shape=p.shape)
+
+
 def _newton(ev: Evaluator, base: Point, res: list[int], alg: list[int], w0: np.ndarray,
             nominal: np.ndarray, noise: np.ndarray, weights: np.ndarray, directional: bool,
-            max_iterations: int) -> _Solve:
+            max_iterations: int, sparse: Sparse | None = None) -> _Solve:
     """Solve g(t, x, w, u) = 0 for w from w0: Newton with the FMU's dg/dw, halving the step
     while the weighted residual norm does not decrease; converged when every residual is
     within its rounding noise."""
@@ -62,8 +113,9 @@ def _newton(ev: Evaluator, base: Point, res: list[int], alg: list[int], w0: np.n
         if np.all(np.abs(g) <= noise):
             return _Solve(w, g, it, True)
         jac = _dgdw(ev, point(w), res, alg, directional,
-                    numdiff.step_sizes(w, nominal, method="central"))
-        dw = np.linalg.lstsq(jac, -g, rcond=None)[0]
+                    numdiff.step_sizes(w, nominal, method="central"), sparse)
+        dw = (jacobians.solve(jac, -g) if sparse is not None
+              else np.linalg.lstsq(jac, -g, rcond=None)[0])
         lam = 1.0
         while True:
             trial = w + lam * dw
@@ -78,7 +130,9 @@ def _newton(ev: Evaluator, base: Point, res: list[int], alg: list[int], w0: np.n
 
 
 def compare_modes(ctx, s: Survey, ps: PointSurvey, res_i, cmp_i, alg_j, res, cmp, alg, *,
-                  rtol, margin, ulps, max_iterations):
+                  rtol, margin, ulps, max_iterations, sparse: Sparse | None = None):
+    """The worst disagreement of the two modes at ``ps`` (ratio, evidence), or None. With
+    ``sparse`` (a large dg/dw), Newton uses its coloured, sparse form."""
     layout = s.layout
     values = {c.vr: float(v) for c, v in zip(layout.cols, ps.x)
               if c.role in ("state", "input")}
@@ -103,12 +157,14 @@ def compare_modes(ctx, s: Survey, ps: PointSurvey, res_i, cmp_i, alg_j, res, cmp
         else:
             solve = _newton(ctx.dae, base, res, alg, w0, layout.nominal[alg_j],
                             noise[res_i], res_tol, directional_verdict(ctx, s)[0],
-                            max_iterations)
+                            max_iterations, sparse)
         at = Point(base.t, {**base.values, **dict(zip(alg, solve.w.tolist()))}, base.label)
         dae = ctx.dae.evaluate(at, cmp)
     except (FmiError, np.linalg.LinAlgError):
         return None
-    tol = rtol * (np.abs(ode) + scale[cmp_i]) + noise[cmp_i]
+    under = floors.underflowing_rows(e.rows, e.fd, len(layout.rows))[cmp_i]
+    tol = np.maximum(rtol * (np.abs(ode) + scale[cmp_i]) + noise[cmp_i],
+                     floors.value_floor(layout.row_nominal[cmp_i], under, ulps=ulps))
     diff = np.abs(dae - ode)
     finite = np.isfinite(diff) & np.isfinite(tol)   # non-finite values: nan-or-inf
     if not np.all(np.isfinite(g0)) or np.all(diff[finite] <= tol[finite]) and (
@@ -120,9 +176,14 @@ def compare_modes(ctx, s: Survey, ps: PointSurvey, res_i, cmp_i, alg_j, res, cmp
     return float(diff[k] / tol[k]) if tol[k] > 0 else np.inf, {
         "worst": names[k], "ode": dict(zip(names, ode.tolist())),
         "dae": dict(zip(names, dae.tolist())), "tolerance": dict(zip(names, tol.tolist())),
-        "algebraic_ode": dict(zip([layout.cols[j].name for j in alg_j], w0.tolist())),
-        "algebraic_dae": dict(zip([layout.cols[j].name for j in alg_j], solve.w.tolist())),
-        "residual_at_ode_algebraic": dict(zip([layout.rows[i].name for i in res_i], g0.tolist())),
+        "algebraic_ode": _shown([layout.cols[j].name for j in alg_j], w0),
+        "algebraic_dae": _shown([layout.cols[j].name for j in alg_j], solve.w),
+        "residual_at_ode_algebraic": _shown([layout.rows[i].name for i in res_i], g0),
         "newton_iterations": solve.iterations, "newton_converged": solve.converged,
         "scale": "rtol * (|ODE value| + S_i) + margin * noise, S_i = sum_j |J_ij| * nominal_j",
         "point": point_evidence(layout, ps)}
+
+
+def _shown(names: list[str], values: np.ndarray) -> dict[str, float]:
+    """The first :data:`SHOWN` values by name (all of a small model)."""
+    return dict(zip(names[:SHOWN], values[:SHOWN].tolist()))

@@ -78,6 +78,10 @@ class ProbeOutcome:
     skipped: set[tuple[str, str]] = field(default_factory=set)
     not_run: set[tuple[str, str]] = field(default_factory=set)   # the failed part of skipped
     info: dict[str, Any] = field(default_factory=dict)
+    # what each step of the workers cost: {"probe", "seconds", "calls", "fmi_seconds",
+    # "peak_rss"}; logged,
+    # never part of the report (it differs from run to run)
+    stats: list[dict[str, Any]] = field(default_factory=list)
 
 
 def run_probes(source: Any, ctx: Any, rules: Sequence[RuleSpec], *, seed: int = 0,

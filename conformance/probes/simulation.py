@@ -10,7 +10,8 @@ shared by :mod:`.simulation_runs` so that every rule reads the same runs; here t
   stopped there instead of crawling on);
 * ``evaluation-failed-during-simulation``: fmi3Discard/NaN that smaller steps did not get past,
   or fmi3Error;
-* ``simulation-budget-exceeded``: our step or wall-clock budget ran out;
+* ``simulation-budget-exceeded``: our budget of steps ran out (a run that lsdae's wall-clock
+  safety net stopped is judged by no rule: the simulation rules are not run then);
 * ``ode-dae-trajectory-mismatch``: the two modes compared at common output times.
 
 One fault, one finding: the ODE-mode run only follows a complete DAE-mode run; a run that ends
@@ -37,8 +38,8 @@ from ..numerics.settings import Settings, Trajectory
 from .api import (EVENT_INDICATOR_FAULT, ODE_DAE_FAULT, PLANNED, FmiError, ProbeContext,
                   ProbeSkipped)
 from .common import layout_of, root_location
-from .simulation_runs import (both_runs, points_fail, run, run_evidence, settings_of,
-                              simulate_mode)
+from .simulation_runs import (OutOfTime, both_runs, points_fail, run, run_evidence,
+                              settings_of, simulate_mode, time_budget)
 
 log = logging.getLogger(__name__)
 
@@ -109,7 +110,8 @@ def evaluation_failed_during_simulation(ctx: ProbeContext) -> Iterator[Violation
 
 
 def simulation_budget_exceeded(ctx: ProbeContext) -> Iterator[Violation]:
-    """The run reaches the stop time within our step and wall-clock budget."""
+    """The run reaches the stop time within our budget of steps (a count: the same verdict on
+    every machine)."""
     for traj in both_runs(ctx):
         if traj.status != st.BUDGET:
             continue
@@ -227,6 +229,8 @@ def _confirm(ctx: ProbeContext, worst: dict[str, Any], rtol: float, *,
         return {"rtol": rtol, "note": f"not confirmed: {exc}"}
     values = []
     for traj in runs:
+        if traj.status == st.TIME_BUDGET:  # the safety net: no verdict may rest on it
+            raise OutOfTime(f"{time_budget(traj)} (a confirmation run at rtol {rtol:g})")
         if worst["t"] not in traj.times or worst["variable"] not in traj.names:
             return {"rtol": rtol, "note": f"not confirmed: the {traj.mode.upper()}-mode run "
                     f"ended at t = {traj.t_end:g} ({traj.status})"}

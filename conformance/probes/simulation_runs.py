@@ -65,6 +65,8 @@ def run(ctx: ProbeContext, mode: str) -> Trajectory:
         traj = simulate_mode(ctx, mode)
         ctx.facts.setdefault("simulation.runs", {})[mode] = traj
         publish(ctx)
+        if traj.status == st.TIME_BUDGET:
+            raise OutOfTime(time_budget(traj))
         owner = owned_elsewhere(traj)
         if owner:
             raise ProbeSkipped(owner)
@@ -78,6 +80,18 @@ def run(ctx: ProbeContext, mode: str) -> Trajectory:
         raise skipped from None
     ctx.facts[key] = traj
     return traj
+
+
+class OutOfTime(ProbeSkipped):
+    """A run was stopped by the wall-clock safety net: no simulation rule may judge."""
+
+
+def time_budget(traj: Trajectory) -> str:
+    """Why no rule judges a run the wall-clock safety net stopped."""
+    return (f"time budget: the {traj.mode.upper()}-mode run was stopped at t = "
+            f"{traj.t_end:.9g} of {traj.stop_time:g} after {traj.steps} steps by lsdae's "
+            f"wall-clock safety net (wall_seconds = {traj.event.get('value')} s of "
+            "simulation-failed): a faster machine could have finished it, so no verdict")
 
 
 def owned_elsewhere(traj: Trajectory) -> str:
@@ -153,10 +167,11 @@ def publish(ctx: ProbeContext) -> None:
     runs = [done[m] for m in ("dae", "ode") if m in done]
     if not runs:
         return
-    timing = settings_of(ctx).record_wall_time
-    info = runs[0].to_info(limit=MAX_PUBLISHED_TIMES, timing=timing)
+    settings = settings_of(ctx)
+    timing, series = settings.record_wall_time, settings.published_series
+    info = runs[0].to_info(limit=MAX_PUBLISHED_TIMES, timing=timing, series=series)
     if len(runs) == 2:
-        info["ode"] = runs[1].to_info(limit=MAX_PUBLISHED_TIMES, timing=timing)
+        info["ode"] = runs[1].to_info(limit=MAX_PUBLISHED_TIMES, timing=timing, series=series)
         found = compare(runs[0], runs[1])
         if found is not None:
             info["comparison"] = {"gaps": found.gaps, "worst": found.worst,
@@ -172,6 +187,8 @@ def both_runs(ctx: ProbeContext) -> list[Trajectory]:
     for mode in ("dae", "ode"):
         try:
             out.append(run(ctx, mode))
+        except OutOfTime:
+            raise  # a verdict on the other run alone could differ on a faster machine
         except ProbeSkipped:
             continue
     if not out:

@@ -8,19 +8,24 @@ the points, and runs each probe in turn, sending one JSON event per step:
     {"event": "ready", "info": {...}}             setup done (points, seed)
     {"event": "load-failed", "violation": {...}}  the binary cannot be loaded
     {"event": "start", "code": "DAE7xx"}
-    {"event": "done", "code": ..., "violations": [...], "skipped": reason|null, "info": {...}}
+    {"event": "done", "code": ..., "violations": [...], "skipped": reason|null, "info": {...},
+     "stats": {"seconds": s, "calls": n, "fmi_seconds": s, "peak_rss": bytes}}
     {"event": "memory", "code": ...}              Python itself ran out of memory
     {"event": "fatal", "code": ...}               a call returned fmi3Fatal: this process stops,
                                                   a fresh one runs the remaining probes
     {"event": "end"}
 
-The runner (``conformance.probes.runner``) reads them and decides what a death means.
+The runner (``conformance.probes.runner``) reads them and decides what a death means. ``stats``
+(also in "ready", for the setup) is what the step cost: wall seconds, FMI calls and the peak
+resident size of the worker during it; the driver logs them (``lsdae check -v``) and never puts
+them in the report, which stays the same from run to run.
 """
 from __future__ import annotations
 
 import mmap
 import os
 import sys
+import time
 import traceback
 from typing import Any, Callable
 
@@ -28,7 +33,7 @@ import numpy as np
 
 from ..report.findings import Location, Violation, evidence
 from ..runtime.callrecord import CallRecord
-from ..runtime.child import memory_info
+from ..runtime.child import memory_info, reset_peak_memory
 from ..runtime.layout import Layout
 from ..runtime.library import Library
 from ..runtime.modes import start_initialization, start_instance
@@ -50,8 +55,10 @@ class _Stage:
         self.job = job
         self.payload: ProbeJob = job.payload
         self.send = send
+        self._sent: dict[str, Any] = {}   # the published-once info values already sent
 
     def run(self) -> int:
+        started = time.perf_counter()
         with open(self.job.call_file, "r+b") as fh:
             record = CallRecord(mmap.mmap(fh.fileno(), CallRecord.SIZE))
         record.set_probe("setup")
@@ -66,7 +73,9 @@ class _Stage:
                 evidence(error=error, exception=type(exc).__name__)))})
             return 0
         ctx = self._context(library, layout)
-        self.send({"event": "ready", "info": ctx.facts["info"], "memory": memory_info()})
+        self.send({"event": "ready", "info": self._info(ctx.facts["info"]),
+                   "memory": memory_info(),
+                   "stats": _stats(started, library.calls, library.seconds)})
         for code, name, options in self.payload.probes:
             renew_failed(ctx)  # a probe never inherits an instance another one terminated
             self._probe(ctx, record, code, name, options)
@@ -77,6 +86,20 @@ class _Stage:
         library.free_all()
         self.send({"event": "end"})
         return 0
+
+    def _info(self, info: Any) -> dict[str, Any]:
+        """The part of ``info`` to send with a "done" event: everything but the values of
+        :data:`PUBLISHED_ONCE` already sent (the driver keeps what it received)."""
+        if not isinstance(info, dict):
+            return {}
+        out = {}
+        for key, value in info.items():
+            if key in PUBLISHED_ONCE:
+                if self._sent.get(key) is value:
+                    continue
+                self._sent[key] = value
+            out[key] = value
+        return out
 
     def _context(self, library: Library, layout: Layout) -> ProbeContext:
         facts: dict[str, Any] = {"layout": layout, "library": library, "info": {},
@@ -110,6 +133,10 @@ class _Stage:
                options: dict[str, Any]) -> None:
         record.set_probe(code)
         self.send({"event": "start", "code": code})
+        library: Any = ctx.facts["library"]
+        calls, inside = library.calls, library.seconds
+        reset_peak_memory()
+        started = time.perf_counter()
         violations: list[Any] = []
         skipped = None
         try:
@@ -131,4 +158,18 @@ class _Stage:
                 rule="internal-error"))
         self.send({"event": "done", "code": code,
                    "violations": [violation_json(v) for v in violations],
-                   "skipped": skipped, "info": ctx.facts.get("info", {})})
+                   "skipped": skipped, "info": self._info(ctx.facts.get("info", {})),
+                   "stats": _stats(started, library.calls - calls, library.seconds - inside)})
+
+
+# Info values a probe publishes once as a new object and never changes in place: sent again
+# only when replaced (at 10,000 variables they are megabytes of JSON).
+PUBLISHED_ONCE = ("points", "seed", "jacobian", "simulation")
+
+
+def _stats(started: float, calls: int, inside: float) -> dict[str, Any]:
+    """What a step cost: wall seconds since ``started``, ``calls`` FMI calls and ``inside``
+    seconds in them, the peak resident size since the last :func:`reset_peak_memory` (bytes;
+    None off Linux)."""
+    return {"seconds": round(time.perf_counter() - started, 6), "calls": int(calls),
+            "fmi_seconds": round(inside, 6), "peak_rss": memory_info(("VmHWM",)).get("VmHWM")}

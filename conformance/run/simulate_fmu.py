@@ -113,6 +113,7 @@ def simulation_catalogue(settings: Any, *, time_limit: float | None = None) -> C
         if rule.name == "simulation-failed":
             rule = dataclasses.replace(rule, options=tuple(sorted(
                 {**rule.option_values, **settings.as_options(),
+                 "published_series": 0,   # every trajectory: the command writes them out
                  "output_times": tuple(settings.output_times),
                  "start_values": tuple(tuple(p) for p in settings.start_values)}.items())))
         elif rule.name == "binary-timed-out":

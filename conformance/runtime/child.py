@@ -57,18 +57,30 @@ def _channel() -> Any:
     return os.fdopen(fd, "w", buffering=1, encoding="utf-8")
 
 
-def memory_info() -> dict[str, int]:
-    """VmSize and VmRSS in bytes (Linux), so the supervisor can judge a later death."""
+def memory_info(keys: tuple[str, ...] = ("VmSize", "VmRSS")) -> dict[str, int]:
+    """``keys`` of /proc/self/status in bytes (Linux; VmSize and VmRSS by default, so the
+    supervisor can judge a later death; VmHWM is the peak resident size)."""
     out: dict[str, int] = {}
     try:
         with open("/proc/self/status", encoding="ascii") as fh:
             for line in fh:
                 key, _, rest = line.partition(":")
-                if key in ("VmSize", "VmRSS"):
+                if key in keys:
                     out[key] = int(rest.split()[0]) * 1024
     except (OSError, ValueError, IndexError):
         pass
     return out
+
+
+def reset_peak_memory() -> bool:
+    """Start a new peak of the resident size (VmHWM) from now (Linux 4.0 and later: write 5 to
+    /proc/self/clear_refs); False where that is not possible, and VmHWM stays the process's."""
+    try:
+        with open("/proc/self/clear_refs", "w", encoding="ascii") as fh:
+            fh.write("5")
+    except OSError:
+        return False
+    return True
 
 
 def main(argv: list[str]) -> int:

@@ -10,6 +10,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from .arrays import all_in, double_array, pick, present, vr_array
 from .errors import FmiError, Unavailable
 from .library import Library
 from .point import Point
@@ -21,14 +22,6 @@ __all__ = ["Dependency", "DiscreteStates", "Instance", "KnownNotSet", "PointNotS
 # fmi3DependencyKind in the order of the C enum; fmi3Independent has no XML counterpart (MS-13)
 DEPENDENCY_KINDS = ("independent", "constant", "fixed", "tunable", "discrete", "dependent")
 MAX_DEPENDENCIES = 10_000_000   # a larger count from the FMU is garbage, not an allocation
-
-
-def _vrs(values: Sequence[int]) -> Any:
-    return (ctypes.c_uint * len(values))(*values)
-
-
-def _doubles(values: Sequence[float] | np.ndarray) -> Any:
-    return (ctypes.c_double * len(values))(*[float(v) for v in values])
 
 
 class Instance:
@@ -50,6 +43,7 @@ class Instance:
         self.mode = "ode"
         self.started = ""
         self.calls = 0
+        self._joined: dict[tuple[int, int], tuple[Any, Any, tuple[int, ...]]] = {}
         self.failure: FmiError | None = None
         self.initialised = False
         self.initializing = False    # in Initialization Mode, where fmi3Terminate is not allowed
@@ -150,17 +144,17 @@ class Instance:
 
     def set_boolean(self, vr: int, value: bool) -> None:
         values = (ctypes.c_bool * 1)(value)
-        self._fmi("fmi3SetBoolean", _vrs([vr]), 1, values, 1)
+        self._fmi("fmi3SetBoolean", vr_array([vr]), 1, values, 1)
 
     def get_boolean(self, vr: int) -> bool:
         values = (ctypes.c_bool * 1)()
-        self._fmi("fmi3GetBoolean", _vrs([vr]), 1, values, 1)
+        self._fmi("fmi3GetBoolean", vr_array([vr]), 1, values, 1)
         return bool(values[0])
 
     def get_float64(self, vrs: Sequence[int]) -> np.ndarray:
         out = np.zeros(len(vrs))
         if vrs:
-            self._fmi("fmi3GetFloat64", _vrs(vrs), len(vrs),
+            self._fmi("fmi3GetFloat64", vr_array(vrs), len(vrs),
                       out.ctypes.data_as(ctypes.POINTER(ctypes.c_double)), len(vrs))
         return out
 
@@ -169,20 +163,20 @@ class Instance:
         Python numbers, booleans or strings (a NULL string reads as None)."""
         fname, ctype = GETTERS[type_]
         values = (ctype * n)()
-        self._fmi(fname, _vrs(vrs), len(vrs), values, n)
+        self._fmi(fname, vr_array(vrs), len(vrs), values, n)
         if type_ == "String":
             return [v.decode("utf-8", "replace") if v is not None else None for v in values]
         return list(values)
 
     def set_float64(self, vrs: Sequence[int], values: Sequence[float] | np.ndarray) -> None:
         if vrs:
-            self._fmi("fmi3SetFloat64", _vrs(vrs), len(vrs), _doubles(values), len(vrs))
+            self._fmi("fmi3SetFloat64", vr_array(vrs), len(vrs), double_array(values), len(vrs))
 
     def set_time(self, t: float) -> None:
         self._fmi("fmi3SetTime", float(t))
 
     def set_states(self, values: Sequence[float] | np.ndarray) -> None:
-        self._fmi("fmi3SetContinuousStates", _doubles(values), len(values))
+        self._fmi("fmi3SetContinuousStates", double_array(values), len(values))
 
     def get_states(self, n: int) -> np.ndarray:
         out = np.zeros(n)
@@ -218,24 +212,34 @@ class Instance:
         algebraic variables of ``point``; a refused set is a :class:`KnownNotSet` saying what
         was being set (algebraic variables and inputs share one fmi3SetFloat64)."""
         self._known("time", (), lambda: self.set_time(point.t))
+        values = point.values
         states = self.layout.states_for(self.mode)
-        if states and all(vr in point.values for vr in states):
-            self._known("states", states,
-                        lambda: self.set_states([point.values[vr] for vr in states]))
+        if states and all_in(states, values):
+            self._known("states", states, lambda: self.set_states(pick(values, states)))
         dae = self.mode == "dae" and algebraic
-        alg = [vr for vr in (self.layout.algebraic if dae else ()) if vr in point.values]
-        inputs = [vr for vr in self.layout.inputs if vr in point.values]
-        knowns = [*alg, *inputs]
+        alg = present(self.layout.algebraic if dae else (), values)
+        inputs = present(self.layout.inputs, values)
+        knowns = self._knowns(alg, inputs)
         kind = ("algebraic variables and inputs" if alg and inputs
                 else "algebraic variables" if alg else "inputs")
-        self._known(kind, knowns,
-                    lambda: self.set_float64(knowns, [point.values[vr] for vr in knowns]))
+        self._known(kind, knowns, lambda: self.set_float64(knowns, pick(values, knowns)))
 
     def set_algebraic(self, point: Point) -> None:
         """Set the algebraic variables of ``point`` alone (a :class:`KnownNotSet` if refused)."""
-        alg = [vr for vr in self.layout.algebraic if vr in point.values]
+        alg = present(self.layout.algebraic, point.values)
         self._known("algebraic variables", alg,
-                    lambda: self.set_float64(alg, [point.values[vr] for vr in alg]))
+                    lambda: self.set_float64(alg, pick(point.values, alg)))
+
+    def _knowns(self, alg: Sequence[int], inputs: Sequence[int]) -> Sequence[int]:
+        """``alg`` then ``inputs``: one tuple per pair of the layout's tuples (kept, so the
+        value references are converted once), a new list otherwise."""
+        if not (isinstance(alg, tuple) and isinstance(inputs, tuple)):
+            return [*alg, *inputs]
+        key = (id(alg), id(inputs))
+        held = self._joined.get(key)
+        if held is None or held[0] is not alg or held[1] is not inputs:
+            held = self._joined[key] = (alg, inputs, (*alg, *inputs))
+        return held[2]
 
     def _known(self, kind: str, vrs: Sequence[int], action: Any) -> None:
         try:
@@ -303,7 +307,7 @@ class Instance:
                     seed: np.ndarray, n_out: int) -> np.ndarray:
         seed = np.asarray(seed, dtype=float)
         out = np.zeros(n_out)
-        self._fmi(fname, _vrs(list(unknowns)), len(unknowns), _vrs(list(knowns)), len(knowns),
-                  _doubles(seed), len(seed), out.ctypes.data_as(ctypes.POINTER(ctypes.c_double)),
-                  n_out)
+        self._fmi(fname, vr_array(unknowns), len(unknowns), vr_array(knowns), len(knowns),
+                  double_array(seed), len(seed),
+                  out.ctypes.data_as(ctypes.POINTER(ctypes.c_double)), n_out)
         return out

@@ -87,11 +87,11 @@ class Layout:
         ignored: list[str] = []
 
         def usable(vrs: Sequence[int | None]) -> tuple[int, ...]:
-            out: list[int] = []
+            out: dict[int, None] = {}   # insertion-ordered: O(1) membership, first order kept
             for vr in vrs:
                 var = by_vr.get(vr) if vr is not None else None
                 if _scalar_float64(var) and vr not in out:
-                    out.append(vr)  # type: ignore[arg-type]
+                    out[vr] = None  # type: ignore[index]
                 elif var is not None and var.type in FLOAT_TYPES:
                     ignored.append(var.name)
             return tuple(out)

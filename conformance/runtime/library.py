@@ -6,7 +6,8 @@ Every FMI call made through a :class:`Library` goes through one choke point, ``_
   :class:`~conformance.runtime.callrecord.CallRecord` *before* calling, so that the supervisor
   can name the call in progress, and say after how many calls, when the process crashes, hangs
   or runs out of memory;
-* counts the call;
+* counts the call, and the time spent inside the binary (what the FMU costs, apart from
+  lsdae's own work, for the benchmarks and ``lsdae check -v``);
 * turns fmi3Discard, fmi3Error and fmi3Fatal into :class:`~conformance.runtime.errors.FmiError`
   carrying the messages the FMU logged during that call.
 
@@ -16,6 +17,7 @@ from __future__ import annotations
 
 import ctypes
 import os
+import time
 from typing import Any, Callable, Sequence
 
 from .callrecord import CallRecord
@@ -39,6 +41,7 @@ def _recording_class() -> Any:
         class RecordingFMU3Model(FMU3Model):  # type: ignore[misc, valid-type]
             lsdae_record: CallRecord
             lsdae_calls = 0
+            lsdae_seconds = 0.0
             lsdae_log: list[str]
             lsdae_blocked: frozenset[str] = frozenset()
             lsdae_fatal = False
@@ -50,7 +53,9 @@ def _recording_class() -> Any:
                                        "earlier probe (binary-timed-out)")
                 del self.lsdae_log[:]  # the log holds the messages of the last call only
                 self.lsdae_record.enter(fname, self.lsdae_calls + 1)
+                started = time.perf_counter()
                 result = function(*args)
+                self.lsdae_seconds += time.perf_counter() - started
                 self.lsdae_record.leave()
                 self.lsdae_calls += 1
                 if function.restype is ctypes.c_int and result not in (0, 1):
@@ -91,6 +96,11 @@ class Library:
     @property
     def calls(self) -> int:
         return self.fmu.lsdae_calls
+
+    @property
+    def seconds(self) -> float:
+        """Seconds spent inside the binary's functions so far (not in lsdae's code)."""
+        return float(self.fmu.lsdae_seconds)
 
     @property
     def fatal(self) -> bool:

@@ -30,14 +30,16 @@ def simulate_instance(inst: Instance, layout: Layout, settings: Settings, *, sta
     the values it holds; the model and manifest give the declared sparsity of its Jacobian,
     ``derivatives`` whether the FMU's directional derivatives may be used (jacobian_check)."""
     if inst.mode == "dae":
-        system = choose_jacobian(FmuDae(inst, layout, manifest), start, derivatives)
+        system = choose_jacobian(FmuDae(inst, layout, manifest,
+                                        dense_up_to=settings.dense_up_to), start, derivatives)
         y0 = inst.get_float64([*system.states, *system.algebraic])
         traj = integrate_dae(system, settings, t0=start, y0=y0, stop=stop,
                              start_update=inst.discrete)
         if not traj.has_events:  # after events the discrete state no longer fits early times
             traj.residual_along = residual_along(inst, layout, traj)
         return traj
-    ode = choose_jacobian(FmuOde(inst, layout, model), start, derivatives)
+    ode = choose_jacobian(FmuOde(inst, layout, model, dense_up_to=settings.dense_up_to), start,
+                          derivatives)
     nominal = np.array([layout.scale(vr) for vr in ode.algebraic])
     return integrate_ode(ode, settings, t0=start, x0=inst.get_float64(ode.states), stop=stop,
                          algebraic_nominal=nominal, start_update=inst.discrete)

@@ -79,8 +79,9 @@ def refuted_at(system: Any, t: float, y: np.ndarray, *, rtol: float, margin: flo
         return (f"the FMU's directional derivatives were not used: {exc.call} returned "
                 f"{exc.status} at the initial point")
     m = len(jac.rows)
+    row_nominal = np.array([system.layout.scale(vr) for vr in jac.rows], dtype=float)
     diff, tol, _, _ = measure.disagreement(e, e.dd, jac.nominal, m, rtol=rtol, margin=margin,
-                                           ulps=ulps)
+                                           ulps=ulps, row_nominal=row_nominal)
     bad = np.isfinite(e.dd) & np.isfinite(e.fd) & (diff > tol)
     if not bad.any():
         return ""

@@ -57,15 +57,29 @@ def pattern_from(unknowns: Iterable[object | None], columns: Sequence[int]) -> c
 
 
 class _Coloured:
-    """Partial derivatives of ``rows`` with respect to ``cols`` at the values already set."""
+    """Partial derivatives of ``rows`` with respect to ``cols`` at the values already set: a
+    dense array, or (``sparse``) a CSC matrix of the declared entries only."""
 
     def __init__(self, inst, rows: list[int], cols: list[int], pattern: col.Pattern,
-                 nominal: np.ndarray, use_directional: bool):
-        self.inst, self.rows, self.cols, self.pattern = inst, rows, cols, pattern
+                 nominal: np.ndarray, use_directional: bool, *, sparse: bool = False):
+        self.inst, self.pattern = inst, pattern
+        self.rows, self.cols = tuple(rows), tuple(cols)   # tuples: converted once per call
         self.nominal = nominal
         self.colouring = col.colour_columns(pattern)
         self.use_directional = use_directional
         self.source = DIRECTIONAL if use_directional else FINITE_DIFFERENCES
+        self.sparse = sparse
+
+    def _matrix(self, values: np.ndarray) -> Any:
+        """The declared entries' ``values`` (pattern order) as the Jacobian."""
+        p = self.pattern
+        if self.sparse:
+            import scipy.sparse as sp  # scipy: only for a Jacobian too large to be dense
+
+            return sp.csc_array((values, (p.rows, p.cols)), shape=p.shape)
+        jac = np.zeros(p.shape)
+        jac[p.rows, p.cols] = values
+        return jac
 
     def refuse(self, note: str) -> None:
         """Finite differences from now on: the FMU's directional derivatives were not
@@ -77,27 +91,27 @@ class _Coloured:
         """The FMU's ``J @ seed`` at the values already set."""
         return self.inst.directional_as_set(self.rows, self.cols, seed)
 
-    def directional(self) -> np.ndarray:
-        jac = np.zeros(self.pattern.shape)
+    def directional(self) -> Any:
+        values = np.zeros(self.pattern.nnz)
         p = self.pattern
         for g in range(self.colouring.count):
             out = self.inst.directional_as_set(self.rows, self.cols, self.colouring.seed(g))
             k = self.colouring.entries[g]
-            jac[p.rows[k], p.cols[k]] = out[p.rows[k]]
-        return jac
+            values[k] = out[p.rows[k]]
+        return self._matrix(values)
 
-    def differences(self, fun, y: np.ndarray, f0: np.ndarray) -> np.ndarray:
+    def differences(self, fun, y: np.ndarray, f0: np.ndarray) -> Any:
         """Coloured forward differences (one evaluation per group; step sizes of numdiff)."""
         steps = numdiff.step_sizes(y, self.nominal, method="forward")
-        jac = np.zeros(self.pattern.shape)
+        values = np.zeros(self.pattern.nnz)
         p = self.pattern
         for g in range(self.colouring.count):
             seed = self.colouring.seed(g, steps)
             out = fun(y + seed)
             k = self.colouring.entries[g]
             h = steps[p.cols[k]]
-            jac[p.rows[k], p.cols[k]] = (out[p.rows[k]] - f0[p.rows[k]]) / np.where(h > 0, h, 1)
-        return jac
+            values[k] = (out[p.rows[k]] - f0[p.rows[k]]) / np.where(h > 0, h, 1)
+        return self._matrix(values)
 
 
 class _Events:
@@ -156,10 +170,11 @@ def _fatal(exc: FmiError) -> EvaluationFailed:
 class FmuDae(_Events):
     """``F = [f; g]`` of an instance in DAE mode, with ``y = [x; w]`` (see numerics.consistent.DaeSystem)."""
 
-    def __init__(self, inst, layout, manifest, *, use_directional: bool = True):
+    def __init__(self, inst, layout, manifest, *, dense_up_to: int,
+                 use_directional: bool = True):
         self.inst, self.layout = inst, layout
-        self.states, self.algebraic = list(layout.states), list(layout.algebraic)
-        self.derivatives, self.residuals = list(layout.derivatives), list(layout.residuals)
+        self.states, self.algebraic = tuple(layout.states), tuple(layout.algebraic)
+        self.derivatives, self.residuals = tuple(layout.derivatives), tuple(layout.residuals)
         self.nx, self.nw = len(self.states), len(self.algebraic)
         cols = [*self.states, *self.algebraic]
         self.names = [layout.name(vr) for vr in cols]
@@ -169,7 +184,9 @@ class FmuDae(_Events):
         pattern = pattern_from([by_vr.get(vr) for vr in (*self.derivatives, *self.residuals)],
                                cols)
         self.jac = _Coloured(inst, [*self.derivatives, *self.residuals], cols, pattern,
-                             self.nominal, use_directional and layout.provides_directional)
+                             self.nominal, use_directional and layout.provides_directional,
+                             sparse=len(cols) > dense_up_to)
+        self.pattern = (pattern.rows, pattern.cols)   # what a sparse Jacobian may hold
         self.jacobian_source = self.jac.source
         self.indicator_names = [layout.name(vr) for vr in layout.event_indicators]
         self._set_at: tuple[float, bytes] | None = None
@@ -198,7 +215,7 @@ class FmuDae(_Events):
             raise _failed(exc) from None
         return np.concatenate([der, res])
 
-    def partials(self, t: float, y: np.ndarray) -> np.ndarray:
+    def partials(self, t: float, y: np.ndarray) -> Any:
         if not self.jac.use_directional:
             return self.jac.differences(lambda v: self.evaluate(t, v), np.asarray(y, float),
                                         self.evaluate(t, y))
@@ -213,10 +230,11 @@ class FmuDae(_Events):
 class FmuOde(_Events):
     """``x' = f(t, x)`` of an instance in ODE mode (see ode.OdeSystem)."""
 
-    def __init__(self, inst, layout, model, *, use_directional: bool = True):
+    def __init__(self, inst, layout, model, *, dense_up_to: int,
+                 use_directional: bool = True):
         self.inst, self.layout = inst, layout
-        self.states, self.derivatives = list(layout.ode_states), list(layout.ode_derivatives)
-        self.algebraic = list(layout.algebraic)
+        self.states, self.derivatives = tuple(layout.ode_states), tuple(layout.ode_derivatives)
+        self.algebraic = tuple(layout.algebraic)
         self.nx = len(self.states)
         self.names = [layout.name(vr) for vr in self.states]
         self.algebraic_names = [layout.name(vr) for vr in self.algebraic]
@@ -224,7 +242,9 @@ class FmuOde(_Events):
         by_vr = {u.vr: u for u in model.unknowns("ContinuousStateDerivative")}
         pattern = pattern_from([by_vr.get(vr) for vr in self.derivatives], self.states)
         self.jac = _Coloured(inst, self.derivatives, self.states, pattern, self.nominal,
-                             use_directional and layout.provides_directional)
+                             use_directional and layout.provides_directional,
+                             sparse=self.nx > dense_up_to)
+        self.pattern = (pattern.rows, pattern.cols)
         self.jacobian_source = self.jac.source
         self.indicator_names = [layout.name(vr) for vr in layout.ode_event_indicators]
         self._set_at: tuple[float, bytes] | None = None
@@ -251,7 +271,7 @@ class FmuOde(_Events):
             self._set_at = None
             raise _failed(exc) from None
 
-    def partials(self, t: float, x: np.ndarray) -> np.ndarray:
+    def partials(self, t: float, x: np.ndarray) -> Any:
         if not self.jac.use_directional:
             return self.jac.differences(lambda v: self.evaluate(t, v), np.asarray(x, float),
                                         self.evaluate(t, x))

@@ -101,14 +101,24 @@ def model_description(n: int) -> str:
     return "\n".join(lines) + "\n"
 
 
-def residual_dependencies(i: int, n: int) -> list[tuple[int, str]]:
+# The defects that drop x and u from the residuals and rebuild the last residual from the one
+# before it (model.c): their manifest says so (``decoupled``).
+DECOUPLING_DEFECTS = ("DEFECT_SINGULAR_GW", "DEFECT_ILL_CONDITIONED")
+
+
+def residual_dependencies(i: int, n: int, *, decoupled: bool = False) -> list[tuple[int, str]]:
+    if decoupled and i == n - 1:   # LAST_SCALE * link(w, n - 2) + LAST_EXTRA * w[n - 1]
+        return [(vr_w(n - 3), "constant"), (vr_w(n - 2), "dependent"),
+                (vr_w(n - 1), "constant")]
     deps = [(vr_w(i), "dependent")]
-    deps.append((vr_w(i - 1), "constant") if i > 0 else (2, "constant"))
-    deps.append((vr_w(i + 1), "constant") if i < n - 1 else (4, "constant"))
+    if i > 0 or not decoupled:
+        deps.append((vr_w(i - 1), "constant") if i > 0 else (2, "constant"))
+    if i < n - 1 or not decoupled:
+        deps.append((vr_w(i + 1), "constant") if i < n - 1 else (4, "constant"))
     return deps
 
 
-def manifest(n: int) -> str:
+def manifest(n: int, *, decoupled: bool = False) -> str:
     lines = [
         '<?xml version="1.0" encoding="UTF-8"?>',
         '<fmiDAEManifest xmlns:fmi-ls="http://fmi-standard.org/fmi-ls-manifest"',
@@ -125,8 +135,8 @@ def manifest(n: int) -> str:
          f'{_deps([(2, "constant"), (vr_w(0), "constant")])}/>'),
         *(f'    <InitialUnknown valueReference="{vr}" {_deps(_ON_X_AND_U)}/>'
           for vr in (3, 5, *map(vr_w, range(n)))),
-        *(f'    <Residual valueReference="{vr_r(i)}" {_deps(residual_dependencies(i, n))}/>'
-          for i in range(n)),
+        *(f'    <Residual valueReference="{vr_r(i)}" '
+          f'{_deps(residual_dependencies(i, n, decoupled=decoupled))}/>' for i in range(n)),
         "  </ModelStructure>",
         "</fmiDAEManifest>",
     ]
@@ -142,14 +152,16 @@ def max_vars(n: int) -> int:
 
 
 def build_chain(n: int = DEFAULT_N, *, defines: Sequence[str] = ()) -> Path:
-    """The Chain FMU with N algebraic variables (cached by content)."""
+    """The Chain FMU with N algebraic variables (cached by content); with a defect of
+    :data:`DECOUPLING_DEFECTS` its manifest lists the residuals' dependencies as changed."""
     if not 3 <= n <= MAX_N:
         raise ValueError(f"Chain needs 3 <= N <= {MAX_N}")
     base = build_scene("Chain", defines=[f"CHAIN_N={n}", f"FMU_MAX_VARS={max_vars(n)}",
                                          *defines])
-    if n == DEFAULT_N:
+    decoupled = any(d in DECOUPLING_DEFECTS for d in defines)
+    if n == DEFAULT_N and not decoupled:
         return base
-    md, mf = model_description(n).encode(), manifest(n).encode()
+    md, mf = model_description(n).encode(), manifest(n, decoupled=decoupled).encode()
     key = hashlib.sha256(base.read_bytes() + md + mf).hexdigest()[:16]
     target = CACHE / f"Chain-{n}-{key}.fmu"
     if target.exists():

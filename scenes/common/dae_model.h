@@ -26,6 +26,14 @@
 
 #include "fmi3Functions.h"
 
+/* A scene may give its own defaults in scene_config.h (in its folder, which is on the include
+ * path of both the framework and the model): e.g. a larger FMU_MAX_VARS for its default size. */
+#if defined(__has_include)
+#if __has_include("scene_config.h")
+#include "scene_config.h"
+#endif
+#endif
+
 /* Capacity of the value-reference, start and nominal tables of ModelDef below, i.e. the
  * largest nx, nw, nu, ny, nd, nz; a scalable scene (Chain) raises it with -DFMU_MAX_VARS=....
  * The framework sizes its own work arrays from nx, nw, nu, ny and keeps them on the heap. */

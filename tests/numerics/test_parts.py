@@ -15,6 +15,8 @@ from conformance.simulate.output import to_csv
 from conformance.numerics.settings import Settings, Trajectory, parse_times
 from tests.simkit import sim_settings
 
+DENSE = sim_settings().dense_up_to
+
 
 def _traj(mode: str, names, values, *, times=(0.0, 0.5, 1.0), rtol=1e-6, atol=None):
     values = np.array(values, dtype=float)
@@ -76,16 +78,17 @@ def test_scaled_condition_of_a_scalar_dg_dw_sees_it_vanish():
     # rows [f; g], columns [x; w]: g = (1 - y1^2) y2 - y1 near y1 = 1
     eps = 1e-6
     jac = np.array([[0.0, 1.0], [-1.0 / eps, 2 * eps]])
-    cond, direction = scaled_condition(jac, 1, np.ones(2))
+    cond, direction = scaled_condition(jac, 1, np.ones(2), dense_up_to=DENSE)
     assert cond == pytest.approx((1 / eps + 2 * eps) / (2 * eps))
     assert abs(direction[0]) == pytest.approx(1.0)
 
 
 def test_scaled_condition_follows_nominal_values_and_detects_zero_rows():
     jac = np.array([[0, 0, 0], [1, 1, 0], [0, 0, 1e-6]], dtype=float)
-    good, _ = scaled_condition(jac, 1, np.array([1.0, 1.0, 1e6]))
+    good, _ = scaled_condition(jac, 1, np.array([1.0, 1.0, 1e6]), dense_up_to=DENSE)
     assert good == pytest.approx(2.0)  # w2 = 1e-6 * nominal 1e6: as well-conditioned as w1
-    dead, _ = scaled_condition(np.array([[0.0, 1.0], [0.0, 0.0]]), 1, np.ones(2))
+    dead, _ = scaled_condition(np.array([[0.0, 1.0], [0.0, 0.0]]), 1, np.ones(2),
+                               dense_up_to=DENSE)
     assert dead == math.inf
 
 

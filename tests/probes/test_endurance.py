@@ -18,10 +18,10 @@ from conformance.run.engine import EngineOptions, check_fmu
 from conformance.report.findings import Finding, FmuReport, thaw
 from conformance.probes import endurance_run
 from conformance.probes.api import Point, ProbeContext, ProbeSkipped
-from conformance.probes.endurance import KINDS, memory_grows
+from conformance.probes.endurance import KINDS, evaluation_fails_late, memory_grows
 from conformance.probes.endurance_run import FACT, PathRun, RunSettings, lap_points
 from conformance.runtime.callrecord import CallRecord
-from tests.fixtures import build_scene
+from tests.fixtures import build_scene, chain
 
 ENDURANCE = ("DAE760", "DAE761", "DAE762")
 LATE_AFTER = 5000      # scenes/common/fmi3_framework.c: calls on one instance before it strikes
@@ -147,18 +147,48 @@ def _context(facts: dict) -> ProbeContext:
 def test_memory_is_read_on_linux_only(monkeypatch):
     monkeypatch.setattr(endurance_run.sys, "platform", "darwin")
     assert endurance_run.resident_bytes() is None
-    settings = RunSettings("quick", 100, 1.0, 40, 256.0)
+    settings = RunSettings("quick", calls=100, values=10_000, seconds=1.0, samples=40,
+                           max_growth_mib=256.0)
     ctx = _context({FACT: PathRun(settings, memory_note="resident memory is Linux only")})
     with pytest.raises(ProbeSkipped):
         list(memory_grows(ctx, **MEMORY_OPTIONS))
 
 
 def test_a_run_too_short_to_judge_memory_is_skipped():
-    settings = RunSettings("quick", 100, 1.0, 40, 256.0)
+    settings = RunSettings("quick", calls=100, values=10_000, seconds=1.0, samples=40,
+                           max_growth_mib=256.0)
     ctx = _context({FACT: PathRun(settings, calls=12, stopped="failure",
                                   samples=[(0, 1 << 20), (10, 1 << 21)])})
     with pytest.raises(ProbeSkipped):
         list(memory_grows(ctx, **MEMORY_OPTIONS))
+
+
+def test_a_run_the_safety_net_stopped_is_judged_by_no_rule():
+    # the wall clock is a safety net: its end is "not run: time budget", never a verdict,
+    # whatever the samples or the calls made would say
+    settings = RunSettings("quick", calls=50_000, values=10**9, seconds=0.5, samples=40,
+                           max_growth_mib=256.0)
+    grown = [(k * 1000, (1 << 20) + k * (1 << 20)) for k in range(40)]   # 1 KiB per call
+    run = PathRun(settings, calls=39_000, stopped="time", samples=grown, budget_calls=50_000)
+    options = default_catalogue()["DAE760"].option_values
+    for probe, kwargs in ((memory_grows, MEMORY_OPTIONS), (evaluation_fails_late, options)):
+        with pytest.raises(ProbeSkipped, match="^time budget"):
+            list(probe(_context({FACT: run, "endurance.settings": settings}), **kwargs))
+
+
+@pytest.mark.parametrize("n", [100, 1000, 3000])
+def test_the_budget_of_a_large_model_is_counted_in_values_not_seconds(n):
+    # every step passes arrays of about 2N values: the run stops on values_quick, a count
+    # from the model's size, the same on every machine
+    options = default_catalogue()["DAE760"].option_values
+    report = check_fmu(chain.build_chain(n), options=EngineOptions(select=("DAE76",)))
+    assert report.findings == () and not report.rules_not_run
+    info = thaw(report.info)["endurance"]
+    per_step = 2 * 1 + (n + 1) + (n + 1)          # x set and der(x) read, w and u set, r and y read
+    steps = options["values_quick"] // per_step
+    assert info["stopped"] == "budget"
+    assert info["budget_calls"] == min(options["calls_quick"], steps * 5)
+    assert info["budget_calls"] <= info["path_calls"] < info["budget_calls"] + 5
 
 
 # -- instances-not-independent ------------------------------------------------------------------

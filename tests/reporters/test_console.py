@@ -8,7 +8,7 @@ import pytest
 
 from conformance.report.catalogue import default_catalogue
 from conformance.run.engine import EngineOptions, check_paths
-from conformance.report.findings import Finding, FmuReport, Location, Report, Severity, evidence
+from conformance.report.findings import Finding, FmuReport, Location, Report, evidence
 from conformance.reporters.console import EVIDENCE_ITEMS, render
 from tests.reporters.samples import SAMPLE_CATALOGUE, sample_report
 from tests.scenes.test_corpus import corpus_fmu

@@ -120,6 +120,28 @@ SCENES["Chain"] = Scene(
     x_test=[0.7], u_test=[0.3], x_alt=[-0.4], u_alt=[-0.2])
 
 
+def _blocks_g(x, w, u, block=10):
+    n = len(w)
+    blocks = w.reshape(n // block, block)
+    own = np.repeat(blocks.sum(axis=1), block) - w
+    sums = blocks.sum(axis=1)
+    beside = np.repeat(np.concatenate([[0.0], sums[:-1]]) + np.concatenate([sums[1:], [0.0]]),
+                       block)
+    g = 4 * w + np.sin(w) - 0.1 * own - 0.05 * beside
+    g[:block] -= 0.5 * x[0]
+    g[-block:] -= 0.5 * u[0]
+    return g
+
+
+SCENES["Blocks"] = Scene(
+    "Blocks", vr_x=[2], vr_der=[3], vr_w=[10 + 2 * i for i in range(30)],
+    vr_res=[11 + 2 * i for i in range(30)], vr_u=[4], vr_y=[5], vr_enable=1, tunable=False,
+    x0=[1.0], w0=[0.0] * 30, x_nominal=[1.0],
+    f=lambda x, w, u: np.array([w[0] - x[0]]), g=_blocks_g,
+    h=lambda x, w, u: np.array([w[-1]]),
+    x_test=[0.7], u_test=[0.3], x_alt=[-0.4], u_alt=[-0.2])
+
+
 # ---------------------------------------------- hard scenes (issue 5; see their README.md)
 
 def _akzo_rates(x, w):

@@ -29,7 +29,9 @@ def _check(verdict: str | None = None) -> DerivativeCheck:
 def _system(loaded, mode: str, scene: str, *defines: str):
     library, layout, model, manifest = loaded(scene, *defines)
     inst = start_instance(library, mode)
-    system = FmuDae(inst, layout, manifest) if mode == "dae" else FmuOde(inst, layout, model)
+    dense = sim_settings().dense_up_to
+    system = (FmuDae(inst, layout, manifest, dense_up_to=dense) if mode == "dae"
+              else FmuOde(inst, layout, model, dense_up_to=dense))
     return system, layout, model, manifest
 
 

@@ -13,6 +13,8 @@ from conformance.runtime.modes import start_instance
 from conformance.simulate.system import FINITE_DIFFERENCES, FmuDae, FmuOde, pattern_from
 from tests.simkit import sim_settings
 
+DENSE = sim_settings().dense_up_to
+
 
 def test_pattern_from_dependencies_and_dense_rows_without_them():
     rows = [Unknown("Residual", 7, (2, 6), None, None, "m", "p"),
@@ -24,8 +26,8 @@ def test_pattern_from_dependencies_and_dense_rows_without_them():
 def test_directional_jacobian_matches_the_finite_difference_fallback(loaded):
     library, layout, _, manifest = loaded("Robertson")
     inst = start_instance(library, "dae")
-    exact = FmuDae(inst, layout, manifest)
-    fallback = FmuDae(inst, layout, manifest, use_directional=False)
+    exact = FmuDae(inst, layout, manifest, dense_up_to=DENSE)
+    fallback = FmuDae(inst, layout, manifest, dense_up_to=DENSE, use_directional=False)
     assert fallback.jacobian_source == FINITE_DIFFERENCES
     y = np.array([0.9, 2e-5, 0.1 - 2e-5])
     # forward differences: d(massBalance)/d(y2) with a step of 3e-13 loses ~1e-4 to rounding
@@ -39,11 +41,11 @@ def test_directional_jacobian_matches_the_finite_difference_fallback(loaded):
 def test_columns_that_share_no_row_share_a_directional_derivative(loaded):
     library, layout, _, manifest = loaded("Chain")
     inst = start_instance(library, "dae")
-    system = FmuDae(inst, layout, manifest)
+    system = FmuDae(inst, layout, manifest, dense_up_to=DENSE)
     n = system.nx + system.nw
     assert system.jac.colouring.count < n
     y = inst.get_float64([*system.states, *system.algebraic])
-    fallback = FmuDae(inst, layout, manifest, use_directional=False)
+    fallback = FmuDae(inst, layout, manifest, dense_up_to=DENSE, use_directional=False)
     assert system.partials(0.0, y) == pytest.approx(fallback.partials(0.0, y), rel=1e-4,
                                                     abs=1e-6)
 
@@ -53,7 +55,8 @@ def test_fallback_jacobian_integrates_robertson_too(loaded):
     runs = []
     for directional in (True, False):
         inst = start_instance(library, "dae")
-        system = FmuDae(inst, layout, manifest, use_directional=directional)
+        system = FmuDae(inst, layout, manifest, dense_up_to=DENSE,
+                        use_directional=directional)
         y0 = inst.get_float64([*system.states, *system.algebraic])
         runs.append(integrate_dae(system, sim_settings(rtol=1e-6), t0=0.0, y0=y0, stop=40.0))
         inst.free()
@@ -65,7 +68,7 @@ def test_fallback_jacobian_integrates_robertson_too(loaded):
 def test_ode_mode_system_reads_the_algebraic_variables(loaded):
     library, layout, model, _ = loaded("HelloWorldDAE")
     inst = start_instance(library, "ode")
-    system = FmuOde(inst, layout, model)
+    system = FmuOde(inst, layout, model, dense_up_to=DENSE)
     x = np.array([2.0])
     assert system.evaluate(0.1, x) == pytest.approx([2.8])
     assert system.partials(0.1, x)[0, 0] == pytest.approx(1.4)

@@ -4,9 +4,11 @@ from __future__ import annotations
 
 import json
 import os
+import shutil
 import signal
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -36,30 +38,51 @@ def test_check_all_keeps_what_finished_when_interrupted(tmp_path):
     assert report.interrupted and report.not_checked == ("second.fmu", "third.fmu")
 
 
+def _read_into(stream, sink: bytearray) -> None:
+    for chunk in iter(lambda: stream.read1(4096), b""):
+        sink.extend(chunk)
+
+
 @pytest.mark.parametrize("jobs", ["1", "2"])
 def test_ctrl_c_writes_the_finished_reports_and_exits_within_a_second(tmp_path, jobs):
-    clean = build_scene("HelloWorldDAE")
-    hanging = build_scene("SimpleDAE", defines=["DEFECT_HANG_DIRECTIONAL"])
+    # short names, so that the progress line names the clean FMU whatever the checkout's path
+    clean, hanging = "clean.fmu", "hanging.fmu"
+    shutil.copy(build_scene("HelloWorldDAE"), tmp_path / clean)
+    shutil.copy(build_scene("SimpleDAE", defines=["DEFECT_HANG_DIRECTIONAL"]), tmp_path / hanging)
     out = tmp_path / "report.json"
     env = dict(os.environ, PYTHONPATH=str(REPO))
     proc = subprocess.Popen(
-        [sys.executable, "-m", "conformance", "check", str(clean), str(hanging), str(hanging),
-         "-j", jobs, "--format", f"json:{out}", "--format", "console", "--color", "never"],
+        [sys.executable, "-m", "conformance", "check", clean, hanging, hanging,
+         "-j", jobs, "--format", f"json:{out}", "--format", "console", "--color", "never",
+         "--progress", "always"],
         cwd=tmp_path, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
         start_new_session=True)
+    stdout, stderr = bytearray(), bytearray()
+    readers = [threading.Thread(target=_read_into, args=(proc.stdout, stdout), daemon=True),
+               threading.Thread(target=_read_into, args=(proc.stderr, stderr), daemon=True)]
+    for reader in readers:
+        reader.start()
     try:
-        time.sleep(8.0)  # the clean FMU is done, the hanging one waits for its 20 s limit
+        # wait for the progress line of the clean FMU, however loaded the machine; the hanging
+        # one then waits for its 20 s limit, and the second one after it
+        deadline = time.monotonic() + 120
+        while f"checked {clean}".encode() not in stderr:
+            assert proc.poll() is None, "the run ended before it could be interrupted"
+            assert time.monotonic() < deadline, bytes(stderr).decode(errors="replace")
+            time.sleep(0.1)
         assert proc.poll() is None, "the run ended before it could be interrupted"
         sent = time.monotonic()
         os.killpg(proc.pid, signal.SIGINT)  # what a terminal sends on Ctrl-C
-        stdout, stderr = proc.communicate(timeout=10)
+        proc.wait(timeout=10)
         took = time.monotonic() - sent
+        for reader in readers:
+            reader.join(timeout=10)
     finally:
         if proc.poll() is None:
             os.killpg(proc.pid, signal.SIGKILL)
-    assert proc.returncode == 130, stderr.decode()
+    assert proc.returncode == 130, bytes(stderr).decode(errors="replace")
     assert took < 2.0, f"exit took {took:.2f} s after Ctrl-C"  # ~0.3 s; room for a busy CI
     data = json.loads(out.read_text())
-    assert [f["path"] for f in data["fmus"]] == [str(clean)]
-    assert data["interrupted"]["not_checked"] == [str(hanging), str(hanging)]
+    assert [f["path"] for f in data["fmus"]] == [clean]
+    assert data["interrupted"]["not_checked"] == [hanging, hanging]
     assert b"interrupted" in stdout and b"Traceback" not in stderr

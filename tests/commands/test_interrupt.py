@@ -38,6 +38,12 @@ def test_check_all_keeps_what_finished_when_interrupted(tmp_path):
     assert report.interrupted and report.not_checked == ("second.fmu", "third.fmu")
 
 
+def _default_sigint() -> None:
+    """Ctrl-C as on a terminal: a suite started in the background (``make test &``, or a
+    pytest-xdist worker) passes SIGINT on ignored, and Python keeps an ignored SIGINT."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def _read_into(stream, sink: bytearray) -> None:
     for chunk in iter(lambda: stream.read1(4096), b""):
         sink.extend(chunk)
@@ -56,7 +62,7 @@ def test_ctrl_c_writes_the_finished_reports_and_exits_within_a_second(tmp_path, 
          "-j", jobs, "--format", f"json:{out}", "--format", "console", "--color", "never",
          "--progress", "always"],
         cwd=tmp_path, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-        start_new_session=True)
+        start_new_session=True, preexec_fn=_default_sigint)
     stdout, stderr = bytearray(), bytearray()
     readers = [threading.Thread(target=_read_into, args=(proc.stdout, stdout), daemon=True),
                threading.Thread(target=_read_into, args=(proc.stderr, stderr), daemon=True)]

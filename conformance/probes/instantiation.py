@@ -53,7 +53,7 @@ class Instantiated:
         return {h.var.vr: h for h in self.items if h.var.vr is not None}
 
 
-def _size(model: ModelDescription, var: Variable) -> int | None:
+def element_count(model: ModelDescription, var: Variable) -> int | None:
     """Element count of ``var`` from its ``<Dimension>`` elements, or None when not fixed."""
     count = 1
     for dim in var.dimensions:
@@ -95,7 +95,7 @@ def expected_starts(model: ModelDescription, var: Variable) -> list[Any] | None:
     if (var.vr is None or var.start is None or var.initial not in ("exact", "approx")
             or var.type not in GETTERS):
         return None
-    size = _size(model, var)
+    size = element_count(model, var)
     if not size:
         return None
     if var.type == "String":

@@ -177,7 +177,7 @@ def _read_back(ctx: ProbeContext, layout: Layout) -> Iterator[Violation]:
             if fault.problem == "nan" and (var.vr in owned or (
                     fault.state == "Instantiated" and expected_starts(ctx.model, var))):
                 continue
-            by_subject.setdefault((var.vr, fault.problem), []).append(fault)  # type: ignore
+            by_subject.setdefault((fault.item.vr, fault.problem), []).append(fault)
     for (vr, problem), faults in by_subject.items():
         first = faults[0]
         where = [f"{f.state}, {f.mode.upper()} mode" for f in faults]

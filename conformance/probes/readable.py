@@ -40,9 +40,10 @@ SENTINEL_32 = -1.2345678e38  # the same for Float32 (within single precision)
 
 @dataclass(frozen=True)
 class Item:
-    """One readable variable and its serialized element count."""
+    """One readable variable, its value reference and its serialized element count."""
 
     var: Variable
+    vr: int
     size: int
 
 
@@ -78,7 +79,7 @@ def readable(model: ModelDescription, state: str) -> list[Item]:
             continue
         size = element_count(model, var)
         if size and (var.type != "String" or size == 1):
-            items.append(Item(var, size))
+            items.append(Item(var, var.vr, size))
     return items
 
 
@@ -151,13 +152,13 @@ class _Walker:
 
     def read(self, inst: Instance, state: str, type_: str, group: Sequence[Item]) -> bool:
         """Read ``group`` on ``inst``; False when the call was refused (faults not yet known)."""
-        vrs = [item.var.vr for item in group]
+        vrs = [item.vr for item in group]
         n = sum(item.size for item in group)
         floating = type_ in ("Float32", "Float64")
         try:
-            values = inst.get_typed(type_, vrs, n, fill=math.nan if floating else None)  # type: ignore[arg-type]
+            values = inst.get_typed(type_, vrs, n, fill=math.nan if floating else None)
             if floating and any(math.isnan(v) for v in values):
-                again = inst.get_typed(type_, vrs, n, fill=_sentinel(type_))  # type: ignore[arg-type]
+                again = inst.get_typed(type_, vrs, n, fill=_sentinel(type_))
                 self._unwritten(state, type_, group, values, again)
         except FmiError:
             return False
@@ -201,8 +202,7 @@ class _Walker:
         if inst is None:
             return
         try:
-            inst.get_typed(group[0].var.type, [i.var.vr for i in group],  # type: ignore[misc]
-                           sum(i.size for i in group))
+            inst.get_typed(group[0].var.type, [i.vr for i in group], sum(i.size for i in group))
             return  # not refused this time: no finding (evaluation-not-repeatable's business)
         except FmiError as exc:
             for item in group:

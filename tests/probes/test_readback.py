@@ -18,10 +18,13 @@ scenes and the corpus stay clean (tests/probes/test_clean_scenes.py, tests/scene
 from __future__ import annotations
 
 import pytest
+from lxml import etree
 
+from conformance.model.description import read_model_description
+from conformance.probes.readable import STATES, readable
 from conformance.report.findings import Finding
 from conformance.run.engine import EngineOptions, check_fmu
-from tests.fixtures import build_scene
+from tests.fixtures import SCENES_DIR, build_scene, variant
 
 
 def _findings(scene: str, defines: tuple[str, ...], code: str) -> list[Finding]:
@@ -145,3 +148,37 @@ RESETS = [  # (defines, the variables named)
 def test_reset_against_a_fresh_instance(defines, named):
     findings = _findings("SimpleDAE", defines, "DAE712")
     assert {f.subject for f in findings} == named
+
+
+def test_which_variables_are_readable_in_which_state():
+    tree = etree.parse(str(SCENES_DIR / "corpus" / "TypesAndArrays" / "modelDescription.xml"))
+    model = read_model_description(tree)
+    by_state = {state: {i.var.name: i.size for i in readable(model, state)} for state in STATES}
+    instantiated = by_state["Instantiated"]
+    # a start value, or the independent variable (MV-13); arrays with their element counts
+    assert {"time", "x", "scale", "i8", "enabled", "label", "mode"} <= set(instantiated)
+    assert instantiated["gains"] == 3 and instantiated["matrix"] == 4
+    assert not {"der(x)", "y", "total", "disabled", "status"} & set(instantiated)
+    for state in STATES[1:]:
+        assert {"der(x)", "y", "total", "disabled", "status"} <= set(by_state[state])
+    for names in by_state.values():  # no getter for Binary and Clock; clocked: clock not active
+        assert not {"blob", "tick", "ticks"} & set(names)
+
+
+@pytest.mark.parametrize("type_,attributes", [
+    ("Int32", 'variability="discrete"'), ("Boolean", 'variability="discrete"'),
+    ("Float64", ""), ("UInt8", 'causality="parameter" variability="fixed" start="3"'),
+])
+def test_a_variable_the_binary_does_not_know_is_a_finding_in_an_fmu_without_the_layer(
+        type_, attributes):
+    # the XML declares a variable the binary has no value reference for: a plain Model
+    # Exchange FMU, each type, read in ODE mode (a parameter already in Instantiated)
+    ghost = f'<{type_} name="ghost" valueReference="99" {attributes}/>\n    '
+    fmu = variant("TypesAndArrays", md_edits=((
+        '<Float64 name="x" valueReference="1"', ghost + '<Float64 name="x" valueReference="1"'),))
+    report = check_fmu(fmu, options=EngineOptions(probes=True, endurance="off"))
+    found = {f.subject: f.evidence_dict() for f in report.findings if f.code == "DAE724"}
+    assert set(found) == {"ghost"}
+    ev = found["ghost"]
+    assert ev["state"] == ("Instantiated" if "start" in attributes else "Initialization Mode")
+    assert ev["mode"] == "ODE mode" and ev["problem"] == "refused"

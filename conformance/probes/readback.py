@@ -199,12 +199,38 @@ def _groups(layout: Layout, mode: str) -> list[tuple[str, tuple[int, ...]]]:
     return [(name, tuple(vrs)) for name, vrs in groups if vrs]
 
 
+def _setters(layout: Layout, mode: str, a: Point, b: Point) -> list[tuple[str, Point, Any]]:
+    """(the call, the point it leads to from ``a``, the call itself) for each part of the point
+    that differs between ``a`` and ``b``, each on its own: time, the states, the values
+    fmi3SetFloat64 sets (algebraic variables in DAE mode, inputs); last, the whole of ``b``."""
+    states = layout.states_for(mode)
+    knowns = [vr for vr in (*(layout.algebraic if mode == "dae" else ()), *layout.inputs)
+              if vr in b.values and b.values[vr] != a.values.get(vr)]
+    out: list[tuple[str, Point, Any]] = []
+    if b.t != a.t:
+        out.append(("fmi3SetTime", Point(b.t, a.values, f"{a.label} at the time of {b.label}"),
+                    lambda inst: inst.set_time(b.t)))
+    if states and all(vr in b.values for vr in states) and \
+            any(b.values[vr] != a.values.get(vr) for vr in states):
+        moved = {**a.values, **{vr: b.values[vr] for vr in states}}
+        out.append(("fmi3SetContinuousStates", Point(a.t, moved, f"{a.label} with the states of "
+                    f"{b.label}"), lambda inst: inst.set_states([b.values[vr] for vr in states])))
+    if knowns:
+        moved = {**a.values, **{vr: b.values[vr] for vr in knowns}}
+        out.append(("fmi3SetFloat64", Point(a.t, moved, f"{a.label} with the values of "
+                    f"{b.label}"), lambda inst: inst.set_float64(
+                        knowns, [b.values[vr] for vr in knowns])))
+    return [*out, ("setting the whole point", b, lambda inst: inst.set_point(b))]
+
+
 def stale_values_read(ctx: ProbeContext, *, rtol: float, atol: float) -> Iterator[Violation]:
-    """FMI 3.0.2 §3.2.1: after fmi3SetTime, fmi3SetContinuousStates and fmi3SetFloat64 move
-    the point, a variable read with fmi3GetFloat64 has its value at the new point, whatever
-    else is read with it. In each mode, for each group (outputs, derivatives, residuals,
-    algebraic variables, event indicators): point A read whole, point B set, the group read
-    alone, then everything again; the group alone must equal its part of the whole."""
+    """FMI 3.0.2 §3.2.1: after fmi3SetTime, fmi3SetContinuousStates or fmi3SetFloat64 moved the
+    point, a variable read with fmi3GetFloat64 has its value at the new point, whatever else is
+    read with it. In each mode, for each group (outputs, derivatives, residuals, algebraic
+    variables, event indicators) and each setter on its own (then the whole point): point A
+    read whole, one setter moves it to M, the group is read alone; then M is set whole (every
+    setter) and everything read: the group alone must equal that reading. One finding per
+    group and mode, naming every setter after which it showed."""
     layout = layout_of(ctx)
     if len(ctx.points) < 2:
         return
@@ -213,31 +239,37 @@ def stale_values_read(ctx: ProbeContext, *, rtol: float, atol: float) -> Iterato
         groups = _groups(layout, mode)
         everything = list(dict.fromkeys(vr for _, vrs in groups for vr in vrs))
         for name, vrs in groups:
-            try:
-                before = dict(zip(everything, inst.evaluate(a, everything)))
-                inst.set_point(b)
-                alone = inst.get_float64(list(vrs))
-                after = dict(zip(everything, inst.get_float64(everything)))
-            except (FmiError, PointNotSet):  # other rules' findings
-                inst = renew(ctx, mode)
-                if inst is None:
-                    break
-                continue
-            for vr, x in zip(vrs, alone):
-                x, y, old = float(x), float(after[vr]), float(before[vr])
-                if not all(map(math.isfinite, (x, y, old))) or \
-                        close(x, y, rtol=rtol, atol=atol, scale=layout.scale(vr)):
+            first: tuple[int, float, float, float, str, Point] | None = None
+            after_calls: list[str] = []
+            for call, moved, change in _setters(layout, mode, a, b):
+                try:
+                    before = dict(zip(everything, inst.evaluate(a, everything)))
+                    change(inst)
+                    alone = inst.get_float64(list(vrs))
+                    after = dict(zip(everything, inst.evaluate(moved, everything)))
+                except (FmiError, PointNotSet):  # other rules' findings
+                    if (inst := renew(ctx, mode)) is None:
+                        return
                     continue
-                yield Violation(
-                    f"read on its own after the point changed from {a.label} to {b.label} "
-                    f"({_mode(mode)}), {{subject}} gives {x:.17g}; read with everything it "
-                    f"gives {y:.17g} (at {a.label} it was {old:.17g}): fmi3GetFloat64 of the "
-                    f"{name} alone does not bring the evaluation to the new point",
-                    var_location(ctx, vr),
-                    evidence(group=name, alone=x, together=y, previous_point=old,
-                             points=[a.label, b.label], mode=_mode(mode), rtol=rtol, atol=atol),
-                    layout.name(vr))
-                break  # one finding per group and mode: the rest of the group says the same
+                for vr, x in zip(vrs, alone):
+                    x, y, old = float(x), float(after[vr]), float(before[vr])
+                    if all(map(math.isfinite, (x, y, old))) and not close(
+                            x, y, rtol=rtol, atol=atol, scale=layout.scale(vr)):
+                        first = first or (vr, x, y, old, call, moved)
+                        after_calls.append(call)
+                        break
+            if first is None:
+                continue
+            vr, x, y, old, call, moved = first
+            yield Violation(
+                f"read on its own after {call} moved the point from {a.label} to "
+                f"{moved.label} ({_mode(mode)}), {{subject}} gives {x:.17g}, its value there is "
+                f"{y:.17g} (at {a.label} it was {old:.17g}): the evaluation is not brought to "
+                f"the new point when the {name} are read", var_location(ctx, vr),
+                evidence(group=name, alone=x, at_new_point=y, previous_point=old,
+                         points=[a.label, moved.label], changed_by=after_calls,
+                         mode=_mode(mode), rtol=rtol, atol=atol),
+                layout.name(vr))
 
 
 PROBES = {

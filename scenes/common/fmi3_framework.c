@@ -80,6 +80,8 @@
  *   DEFECT_GET_NAN                 fmi3GetFloat64 returns NaN for them
  *   DEFECT_GET_UNWRITTEN           fmi3GetFloat64 leaves their elements of values[] unwritten
  *   DEFECT_STALE_READ              fmi3GetFloat64 of READ_KIND alone does not update the evaluation
+ *   DEFECT_SET_KEEPS_CACHE         a setter keeps the cache (KEEPS_CACHE_ON: 1 fmi3SetTime,
+ *                                  2 fmi3SetContinuousStates, 3 fmi3SetFloat64; READ_DAE's mode)
  *   DEFECT_VECTOR_DERIVATIVES      fmi3GetContinuousStateDerivatives: the last element is off by 1e-6
  *   DEFECT_VECTOR_STATES           fmi3GetContinuousStates: the last element is off by 1e-6
  *   DEFECT_NOMINAL_INVALID         fmi3GetNominalsOfContinuousStates gives NOMINAL_VALUE first
@@ -212,6 +214,9 @@ enum { K_NONE, K_TIME, K_ENABLE, K_X, K_DER, K_W, K_RES, K_U, K_Y, K_Z, K_D };
 #define READ_AIMED(c, kind) ((kind) == READ_KIND && ((c)->d.state & (READ_STATES)) && \
                              (READ_DAE < 0 || (int)(c)->d.dae == READ_DAE))
 #define READ_MODE(c) (READ_DAE < 0 || (int)(c)->d.dae == READ_DAE)
+#ifndef KEEPS_CACHE_ON
+#define KEEPS_CACHE_ON 1
+#endif
 
 /* ------------------------------------------------------------------ helpers */
 
@@ -1350,6 +1355,9 @@ fmi3Status fmi3SetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], 
 #endif
         *slot(c, kind, idx) = values[k];
     }
+#if defined(DEFECT_SET_KEEPS_CACHE) && KEEPS_CACHE_ON == 3
+    if (READ_MODE(c) && c->d.state == ContinuousTimeMode) return fmi3OK;
+#endif
     if (nvr) changed(&c->d);
     return fmi3OK;
 }
@@ -1496,6 +1504,9 @@ fmi3Status fmi3SetTime(fmi3Instance instance, fmi3Float64 time) {
 #endif
     if (!isfinite(time)) FAIL("fmi3SetTime: time is not finite");
     c->d.t = time;
+#if defined(DEFECT_SET_KEEPS_CACHE) && KEEPS_CACHE_ON == 1
+    if (READ_MODE(c)) return fmi3OK;   /* the cache is keyed on the states only */
+#endif
     changed(&c->d);
     return fmi3OK;
 }
@@ -1504,6 +1515,9 @@ fmi3Status fmi3SetContinuousStates(fmi3Instance instance, const fmi3Float64 x[],
     BEGIN("fmi3SetContinuousStates", ContinuousTimeMode);
     if (nx != (size_t)NX || (nx && !x)) FAIL("fmi3SetContinuousStates: expected %d states", NX);
     memcpy(c->x, x, nx * sizeof(double));
+#if defined(DEFECT_SET_KEEPS_CACHE) && KEEPS_CACHE_ON == 2
+    if (READ_MODE(c)) return fmi3OK;
+#endif
     changed(&c->d);
     return fmi3OK;
 }

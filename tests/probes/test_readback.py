@@ -8,7 +8,8 @@
 * state-nominals-invalid (DAE715) and state-nominal-not-xml (DAE716): the value (0, negative,
   NaN, infinite), an unwritten element, another nominal than the XML's; each mode.
 * stale-values-read (DAE717): the group read alone (outputs, derivatives, residuals, algebraic
-  variables, event indicators) and the mode.
+  variables, event indicators), the setter that moved the point (fmi3SetContinuousStates,
+  fmi3SetFloat64, all of them) and the mode.
 * reset-incomplete (DAE712): what fmi3Reset keeps (time and the cache, the algebraic variables,
   the switch and a state).
 
@@ -129,6 +130,22 @@ def test_each_group_read_alone_after_a_change_of_point(scene, kind, group, modes
     findings = _findings(scene, ("DEFECT_STALE_READ", f"READ_KIND={kind}"), "DAE717")
     assert {f.evidence_dict()["group"] for f in findings} == {group}
     assert {f.evidence_dict()["mode"].split()[0] for f in findings} == modes
+
+
+SETTERS = [  # (KEEPS_CACHE_ON, the setter, modes); fmi3SetTime (1) is left out: no small
+    # scene's equations depend on time, so a cache kept across fmi3SetTime changes no value
+    ("2", "fmi3SetContinuousStates", "-1", {"DAE", "ODE"}),
+    ("3", "fmi3SetFloat64", "1", {"DAE"}),
+    ("3", "fmi3SetFloat64", "0", {"ODE"}),
+]
+
+
+@pytest.mark.parametrize("on,setter,mode,modes", SETTERS, ids=[f"{s[1]}-{s[2]}" for s in SETTERS])
+def test_a_setter_that_keeps_the_cache(on, setter, mode, modes):
+    findings = _findings("SimpleDAE", ("DEFECT_SET_KEEPS_CACHE", f"KEEPS_CACHE_ON={on}",
+                                       f"READ_DAE={mode}"), "DAE717")
+    assert findings and {f.evidence_dict()["mode"].split()[0] for f in findings} == modes
+    assert all(f.evidence_dict()["changed_by"][0] == setter for f in findings)
 
 
 def test_stale_reads_in_one_mode_only():

@@ -18,6 +18,9 @@ The file is keyed by mutant id::
     reason = "x_start of x1 is 0.6 in the binary, 0.5 in the XML; no rule reads it"
     evidence = "promises: MV-23 start value in Instantiated (ode) x1"
     line = ".x_start = {0.6, 0.5}, ..."     # the mutated line, for the reader
+    closed_by = "start-value-not-applied (DAE713) ..."   # optional, for the reader: what kills
+                                            # the mutant since (checked by hand; the next
+                                            # campaign confirms it and the entry goes unused)
 
 A survivor without an entry is UNEXPLAINED; one recorded as a consistent model change while
 the promise checks find a promise it newly breaks is CONTRADICTED. Both make the campaign exit

@@ -18,12 +18,15 @@ from .common import (
     dae_of,
     error_evidence,
     layout_of,
+    new_instance,
     renew,
     root_location,
     unknown_location,
     unknowns_of,
     var_location,
 )
+from .instantiation import expected_starts
+from .readable import Fault, sweep
 from ..runtime.instance import Instance, KnownNotSet, PointNotSet
 from ..runtime.layout import Layout
 
@@ -104,9 +107,16 @@ def evaluation_failed(ctx: ProbeContext) -> Iterator[Violation]:
     algebraic-not-settable's: the probe is skipped. The first failing call at a point is the
     finding; it put the instance in Terminated (SM-04), so the next point is evaluated on a
     fresh instance, and a call that fails after an earlier failure on the same instance is
-    not reported."""
-    dae = dae_of(ctx)
+    not reported. Before the points, every variable FMI 3.0 lets an importer read is read once
+    in each state, in both modes (:mod:`.readable`)."""
     layout = layout_of(ctx)
+    found = False
+    for violation in _read_back(ctx, layout):
+        found = True
+        yield violation
+    if ctx.dae is None and (found or layout.enable_status == "no-layer"):
+        return
+    dae = dae_of(ctx)
     unknowns = unknowns_of(layout)
     for point in ctx.points:
         if getattr(dae, "failure", None) is not None:
@@ -143,6 +153,45 @@ def evaluation_failed(ctx: ProbeContext) -> Iterator[Violation]:
                              unknowns=[layout.name(vr) for vr in unknowns]),
                     subject=exc.call)
                 break
+
+
+_SPEC = {"Instantiated": "SG-01", "Initialization Mode": "SG-03", "Event Mode": "SG-04",
+         "Continuous-Time Mode": "SG-05"}
+_PROBLEM = {"unwritten": "returns fmi3OK but leaves its element of the caller's array "
+                         "unwritten (the FMU answers for fewer values than it is asked for)",
+            "nan": "returns NaN"}
+
+
+def _read_back(ctx: ProbeContext, layout: Layout) -> Iterator[Violation]:
+    """Every readable variable, once per state and mode: one finding per variable and problem
+    (the first state it shows in, the others in the evidence). NaN in a residual, derivative,
+    output or algebraic variable is nan-or-inf's, NaN against a start value in Instantiated
+    start-value-not-applied's."""
+    library = ctx.facts["library"]
+    by_subject: dict[tuple[int, str], list[Fault]] = {}
+    for mode in layout.modes:
+        owned = {*unknowns_of(layout, mode), *layout.algebraic}
+        result = sweep(lambda label: new_instance(library, label), ctx.model, mode)
+        for fault in result.faults:
+            var = fault.item.var
+            if fault.problem == "nan" and (var.vr in owned or (
+                    fault.state == "Instantiated" and expected_starts(ctx.model, var))):
+                continue
+            by_subject.setdefault((fault.item.vr, fault.problem), []).append(fault)
+    for (vr, problem), faults in by_subject.items():
+        first = faults[0]
+        where = [f"{f.state}, {f.mode.upper()} mode" for f in faults]
+        more = f" (and {len(where) - 1} other state(s) or mode(s))" if len(where) > 1 else ""
+        verb = _PROBLEM.get(problem, f"returns {first.status}")
+        yield Violation(
+            f"{first.call} of {{subject}} {verb} in {where[0]}{more}, where FMI 3.0 lets an "
+            f"importer read it ({_SPEC[first.state]})", var_location(ctx, vr),
+            evidence(call=first.call, status=first.status, log=list(first.log), problem=problem,
+                     state=first.state, mode=f"{first.mode.upper()} mode", where=where,
+                     value_reference=vr, type=first.item.var.type, element=first.element,
+                     causality=first.item.var.causality,
+                     variability=first.item.var.variability),
+            first.item.var.name)
 
 
 # ------------------------------------------------------------------------ input-not-settable

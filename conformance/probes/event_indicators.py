@@ -26,8 +26,8 @@ from ..report.findings import Location, Violation, evidence
 from ..runtime.instance import Instance, PointNotSet
 from ..runtime.layout import Layout
 from ..model.unknowns import Unknown
-from .api import EVENT_INDICATOR_FAULT, FmiError, Point, ProbeContext, ProbeSkipped, noted
-from .common import close, dae_of, error_evidence, layout_of, root_location, var_location
+from .api import EVENT_INDICATOR_FAULT, PLANNED, FmiError, Point, ProbeContext, ProbeSkipped, noted
+from .common import close, dae_of, error_evidence, layout_of, renew, root_location, var_location
 
 
 def _declared(ctx: ProbeContext) -> tuple[list[Unknown], str]:
@@ -159,7 +159,24 @@ def event_indicators_inconsistent(ctx: ProbeContext, *, rtol: float, atol: float
     for point in (a, a, b, a, b):
         z = _evaluate(dae, point, n)
         if readable:
-            by_vr = dae.get_float64([vr for vr in vrs if vr is not None])
+            try:
+                by_vr = dae.get_float64([vr for vr in vrs if vr is not None])
+            except FmiError as exc:
+                # the vector reads, the variables do not: evaluation-failed's read-back names
+                # the variable, state and mode; without it this rule says so itself
+                readable = False
+                if "DAE724" not in ctx.facts.get(PLANNED, ()):  # type: ignore[operator]
+                    yield Violation(
+                        f"fmi3GetEventIndicators gives values at point {point.label}, but "
+                        f"fmi3GetFloat64 of the indicator variables returns {exc.status}: the "
+                        "vector and the variables disagree", _location(ctx, listed),
+                        evidence(error_evidence(exc), point=point.label, t=point.t),
+                        subject="fmi3GetFloat64")
+                dae = renew(ctx, "dae")
+                if dae is None:
+                    return
+                previous = f"{point.label} (then a fresh instance)"
+                continue
             yield from _against_variables(ctx, layout, names, vrs, point, z, by_vr, reported,
                                           rtol=rtol, atol=atol)
         if point.label in first:

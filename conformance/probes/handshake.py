@@ -8,13 +8,14 @@ failed and the sequence before it.
 """
 from __future__ import annotations
 
+import math
 from typing import Any, Iterator
 
 from ..report.findings import Location, Violation, evidence
 from .api import FmiError, ProbeContext, ProbeSkipped
 from .common import (close, error_evidence, layout_of, manifest_location, new_instance,
                      var_location)
-from .instantiation import Held, instantiated_values
+from .instantiation import Held, instantiated_values, read_held
 from ..runtime.instance import Instance, KnownNotSet
 from ..runtime.layout import Layout
 from ..runtime.library import Library
@@ -185,7 +186,9 @@ def reset_incomplete(ctx: ProbeContext, *, rtol: float, atol: float) -> Iterator
     accepts are compared (a fresh instance is no reference: an FMU that keeps state across
     instances is instances-not-independent's finding, not this one's). Where a fresh instance
     already held another value than the XML start, the reset only has to restore that value:
-    start-value-not-applied reports the first cause."""
+    start-value-not-applied reports the first cause. Every other variable a fresh instance
+    reads in Instantiated (every start value of every type, and time, MV-13) must read the
+    same after the reset (:func:`_against_fresh`)."""
     layout = layout_of(ctx)
     if ctx.dae is None:
         raise ProbeSkipped("DAE mode could not be started (see enable-handshake)")
@@ -193,13 +196,18 @@ def reset_incomplete(ctx: ProbeContext, *, rtol: float, atol: float) -> Iterator
            if vr in layout.start and vr not in layout.flagged_start]
     # Where a fresh instance already does not hold the XML start, start-value-not-applied
     # reports the first cause: fmi3Reset only has to return to what instantiation left.
-    fresh = instantiated_values(ctx).by_vr()
+    snapshot = instantiated_values(ctx)
+    fresh = snapshot.by_vr()
+    others = [h for h in [*snapshot.items, *snapshot.independent] if h.held is not None and
+              h.var.vr not in (*vrs, layout.enable)
+              and h.var.vr not in layout.flagged_start]
+    again = [Held(h.var, h.start) for h in others]
     expected = [layout.start[vr] for vr in vrs]
     instantiated = [_instantiated(fresh.get(vr), layout.start[vr]) for vr in vrs]
     switch = layout.enable if layout.enable_status == "ok" else None
     expected_switch = False if switch is not None else None
     instantiated_switch = _instantiated(fresh.get(switch), False) if switch is not None else None
-    if not vrs and switch is None:
+    if not vrs and switch is None and not others:
         raise ProbeSkipped("no state or input with a start value, and no enable parameter")
     point = ctx.points[1] if len(ctx.points) > 1 else ctx.points[0]
     inst = ctx.new_instance("dae")
@@ -209,6 +217,7 @@ def reset_incomplete(ctx: ProbeContext, *, rtol: float, atol: float) -> Iterator
         try:
             got = inst.get_float64(vrs)  # type: ignore[attr-defined]
             got_switch = inst.get_boolean(switch) if switch is not None else None  # type: ignore
+            read_held(inst, again)  # every other variable a fresh instance answered for
         except FmiError as exc:
             raise ProbeSkipped(f"after fmi3Reset the FMU does not answer {exc.call} in "
                                f"Instantiated ({exc.status}): the reset cannot be checked"
@@ -222,6 +231,7 @@ def reset_incomplete(ctx: ProbeContext, *, rtol: float, atol: float) -> Iterator
             manifest_location(ctx, switch, ("Enable",)),
             evidence(after_reset=got_switch, start=expected_switch, point=point.label),
             subject=layout.name(switch))
+    yield from _against_fresh(ctx, layout, others, again, point, rtol=rtol, atol=atol)
     for vr, a, b, held in zip(vrs, got, expected, instantiated):
         if any(close(float(a), float(v), rtol=rtol, atol=atol, scale=layout.scale(vr))
                for v in (b, held)):
@@ -232,6 +242,47 @@ def reset_incomplete(ctx: ProbeContext, *, rtol: float, atol: float) -> Iterator
             evidence(after_reset=float(a), start=float(b), set_before=point.values.get(vr),
                      instantiated=float(held), point=point.label, scale=layout.scale(vr)),
             subject=layout.name(vr))
+
+
+def _against_fresh(ctx: ProbeContext, layout: Layout, fresh: list[Held], after: list[Held],
+                   point: Any, *, rtol: float, atol: float) -> Iterator[Violation]:
+    """Every other variable a fresh instance read in Instantiated (start values of every type,
+    and time) against its reading after fmi3Reset: "the same state as if fmi3Instantiate had
+    been called" (FMI 3.0.2 §2.3.1)."""
+    for h0, h1 in zip(fresh, after):
+        if h1.held is None:
+            exc = h1.error
+            if exc is not None and exc.after is not None:
+                continue  # a consequence of the refusal before it (SM-04)
+            yield Violation(
+                f"after fmi3Reset {exc.call if exc else 'fmi3Get'} of {{subject}} returns "
+                f"{exc.status if exc else 'an error'} in Instantiated, where a fresh instance "
+                "answers it", var_location(ctx, h0.var.vr),  # type: ignore[arg-type]
+                evidence(error_evidence(exc) if exc else {}, instantiated=h0.held,
+                         point=point.label), subject=h0.var.name)
+            continue
+        if all(_same(h0.var.type, a, b, layout.scale(h0.var.vr), rtol, atol)  # type: ignore
+               for a, b in zip(h0.held, h1.held)):  # type: ignore[arg-type]
+            continue
+        yield Violation(
+            "after fmi3Reset {subject} reads a value set or computed before the reset, not "
+            "what a fresh instance reads (MV-23)", var_location(ctx, h0.var.vr),  # type: ignore
+            evidence(after_reset=_plain(h1.held), instantiated=_plain(h0.held),
+                     type=h0.var.type, causality=h0.var.causality, point=point.label),
+            subject=h0.var.name)
+
+
+def _same(type_: str, a: Any, b: Any, scale: float, rtol: float, atol: float) -> bool:
+    if type_ in ("Float32", "Float64"):
+        a, b = float(a), float(b)
+        return (math.isnan(a) and math.isnan(b)) or a == b or close(
+            a, b, rtol=rtol, atol=atol, scale=scale)
+    return bool(a == b)
+
+
+def _plain(values: Any) -> Any:
+    values = [float(v) if isinstance(v, float) else v for v in values]
+    return values[0] if len(values) == 1 else values
 
 
 def _instantiated(held: Held | None, start: Any) -> Any:

@@ -44,16 +44,18 @@ class Held:
 
 @dataclass
 class Instantiated:
-    """The snapshot: every variable read, or why none could be (``reason``)."""
+    """The snapshot: every variable read, or why none could be (``reason``); ``independent``:
+    the independent variable, which has no start but may be read (MV-13), as time reads there."""
 
     items: list[Held] = field(default_factory=list)
     reason: str = ""
+    independent: list[Held] = field(default_factory=list)
 
     def by_vr(self) -> dict[int, Held]:
         return {h.var.vr: h for h in self.items if h.var.vr is not None}
 
 
-def _size(model: ModelDescription, var: Variable) -> int | None:
+def element_count(model: ModelDescription, var: Variable) -> int | None:
     """Element count of ``var`` from its ``<Dimension>`` elements, or None when not fixed."""
     count = 1
     for dim in var.dimensions:
@@ -95,7 +97,7 @@ def expected_starts(model: ModelDescription, var: Variable) -> list[Any] | None:
     if (var.vr is None or var.start is None or var.initial not in ("exact", "approx")
             or var.type not in GETTERS):
         return None
-    size = _size(model, var)
+    size = element_count(model, var)
     if not size:
         return None
     if var.type == "String":
@@ -135,14 +137,18 @@ def _take(ctx: ProbeContext) -> Instantiated:
         inst = new_instance(library, "instantiated")
     except FmiError as exc:
         return Instantiated(reason=f"{exc.call} returned {exc.status}: nothing to read")
+    independent = [Held(v, [math.nan]) for v in model.variables if v.vr is not None and
+                   v.causality == "independent" and v.type in ("Float32", "Float64") and
+                   not v.dimensions]
     try:
-        _read(inst, items)
+        read_held(inst, items)
+        read_held(inst, independent)
     finally:
         inst.free()
-    return Instantiated(items)
+    return Instantiated(items, independent=independent)
 
 
-def _read(inst: Any, items: list[Held]) -> None:
+def read_held(inst: Any, items: list[Held]) -> None:
     """Scalars of one type in one call, each array in a call of its own. A refused call
     leaves its variables unread (``error``): FMI 3.0 allows fmi3Get* in Instantiated (SG-01),
     but a refusal is not a value the instance holds, so nothing is compared for them."""

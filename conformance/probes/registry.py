@@ -25,6 +25,7 @@ FAMILIES: dict[str, tuple[str, ...]] = {
     "simulation": ("DAE801", "DAE802", "DAE803", "DAE804", "DAE805"),
     "invariants": ("DAE806",),
     "importer_paths": ("DAE730", "DAE731"),
+    "readback": ("DAE714", "DAE715", "DAE716", "DAE717"),
     "event_indicators": ("DAE732", "DAE733"),
     "initial_unknowns": ("DAE750", "DAE751", "DAE752"),
     "endurance": ("DAE760", "DAE761", "DAE762"),

@@ -158,11 +158,13 @@ class Instance:
                       out.ctypes.data_as(ctypes.POINTER(ctypes.c_double)), len(vrs))
         return out
 
-    def get_typed(self, type_: str, vrs: Sequence[int], n: int) -> list[Any]:
+    def get_typed(self, type_: str, vrs: Sequence[int], n: int, *, fill: Any = None
+                  ) -> list[Any]:
         """fmi3Get<type> of ``vrs`` holding ``n`` values in all (arrays serialized, SG-09), as
-        Python numbers, booleans or strings (a NULL string reads as None)."""
+        Python numbers, booleans or strings (a NULL string reads as None); the buffer holds
+        ``fill`` before the call when given (what an element the FMU does not write keeps)."""
         fname, ctype = GETTERS[type_]
-        values = (ctype * n)()
+        values = (ctype * n)(*([fill] * n if fill is not None else []))
         self._fmi(fname, vr_array(vrs), len(vrs), values, n)
         if type_ == "String":
             return [v.decode("utf-8", "replace") if v is not None else None for v in values]
@@ -182,6 +184,13 @@ class Instance:
         out = np.zeros(n)
         self._fmi("fmi3GetContinuousStates", out.ctypes.data_as(ctypes.POINTER(ctypes.c_double)),
                   n)
+        return out
+
+    def get_nominals(self, n: int, fill: float = 0.0) -> np.ndarray:
+        """fmi3GetNominalsOfContinuousStates into a buffer that holds ``fill`` before the call."""
+        out = np.full(n, fill, dtype=float)
+        self._fmi("fmi3GetNominalsOfContinuousStates",
+                  out.ctypes.data_as(ctypes.POINTER(ctypes.c_double)), n)
         return out
 
     def get_derivatives(self, n: int | None = None) -> np.ndarray:

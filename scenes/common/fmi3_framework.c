@@ -74,6 +74,21 @@
  *   DEFECT_LEAK                    fmi3GetFloat64 keeps 1 KiB on every call, never freed
  *   DEFECT_GLOBAL_STATE            the states x live in one C global shared by every instance
  *   DEFECT_STALE_STATES            a new instance starts from the states of the last one freed
+ * and for the read-back probes (tests/fixtures/defects/readback.py), each aimed by READ_KIND
+ * (K_TIME, K_X, ... K_D), READ_STATES (a mask of states) and READ_DAE (1 DAE mode, 0 ODE, -1 both):
+ *   DEFECT_GET_REFUSED             fmi3GetFloat64 refuses the variables aimed at
+ *   DEFECT_GET_NAN                 fmi3GetFloat64 returns NaN for them
+ *   DEFECT_GET_UNWRITTEN           fmi3GetFloat64 leaves their elements of values[] unwritten
+ *   DEFECT_STALE_READ              fmi3GetFloat64 of READ_KIND alone does not update the evaluation
+ *   DEFECT_SET_KEEPS_CACHE         a setter keeps the cache (KEEPS_CACHE_ON: 1 fmi3SetTime,
+ *                                  2 fmi3SetContinuousStates, 3 fmi3SetFloat64; READ_DAE's mode)
+ *   DEFECT_VECTOR_DERIVATIVES      fmi3GetContinuousStateDerivatives: the last element is off by 1e-6
+ *   DEFECT_VECTOR_STATES           fmi3GetContinuousStates: the last element is off by 1e-6
+ *   DEFECT_NOMINAL_INVALID         fmi3GetNominalsOfContinuousStates gives NOMINAL_VALUE first
+ *   DEFECT_NOMINAL_UNWRITTEN       fmi3GetNominalsOfContinuousStates leaves the first unwritten
+ *   DEFECT_NOMINAL_NOT_XML         fmi3GetNominalsOfContinuousStates: the first is 1.1 times the XML's
+ *   DEFECT_RESET_KEEPS_TIME        fmi3Reset keeps time and the evaluation cache
+ *   DEFECT_RESET_KEEPS_GUESS       fmi3Reset keeps the algebraic variables' last values
  */
 #include <math.h>
 #include <stdarg.h>
@@ -185,6 +200,23 @@ typedef struct {
 } Instance;
 
 enum { K_NONE, K_TIME, K_ENABLE, K_X, K_DER, K_W, K_RES, K_U, K_Y, K_Z, K_D };
+
+/* The variables the read-back defects aim at (DEFECT_GET_*, DEFECT_STALE_READ, DEFECT_VECTOR_*). */
+#ifndef READ_KIND
+#define READ_KIND K_TIME
+#endif
+#ifndef READ_STATES
+#define READ_STATES ANY_STATE
+#endif
+#ifndef READ_DAE
+#define READ_DAE (-1)
+#endif
+#define READ_AIMED(c, kind) ((kind) == READ_KIND && ((c)->d.state & (READ_STATES)) && \
+                             (READ_DAE < 0 || (int)(c)->d.dae == READ_DAE))
+#define READ_MODE(c) (READ_DAE < 0 || (int)(c)->d.dae == READ_DAE)
+#ifndef KEEPS_CACHE_ON
+#define KEEPS_CACHE_ON 1
+#endif
 
 /* ------------------------------------------------------------------ helpers */
 
@@ -1172,6 +1204,20 @@ fmi3Status fmi3Reset(fmi3Instance instance) {
         return fmi3OK;
     }
 #endif
+#if defined(DEFECT_RESET_KEEPS_TIME) || defined(DEFECT_RESET_KEEPS_GUESS)
+    {   /* time and the evaluation cache, or the algebraic variables, survive the reset */
+        Data kept = c->d;
+        memcpy(c->wt, c->w, sizeof(double) * (size_t)NW);
+        reset_data(c);
+#ifdef DEFECT_RESET_KEEPS_TIME
+        c->d.t = kept.t;
+        c->d.eval_valid = kept.eval_valid;
+#else
+        memcpy(c->w, c->wt, sizeof(double) * (size_t)NW);
+#endif
+        return fmi3OK;
+    }
+#endif
     reset_data(c);
     return fmi3OK;
 }
@@ -1223,6 +1269,14 @@ fmi3Status fmi3GetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], 
     for (k = 0; k < nvr; k++) {
         int kind = lookup(c, vr[k], &idx);
         if (!slot(c, kind, idx)) FAIL("fmi3GetFloat64: no Float64 variable %u", (unsigned)vr[k]);
+#ifdef DEFECT_GET_REFUSED
+        if (READ_AIMED(c, kind))
+            FAIL("fmi3GetFloat64: variable %u cannot be read in %s", (unsigned)vr[k],
+                 state_name(c->d.state));
+#endif
+#ifdef DEFECT_STALE_READ
+        if (kind == READ_KIND && READ_MODE(c)) continue;   /* read alone: the last point's value */
+#endif
         computed |= kind == K_DER || kind == K_RES || kind == K_Y || kind == K_W || kind == K_Z;
 #ifdef DEFECT_SEGFAULT_GETFLOAT64
         if (kind == K_RES && c->d.state == ContinuousTimeMode) {
@@ -1238,7 +1292,13 @@ fmi3Status fmi3GetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], 
     if (computed && (status = update(c)) != fmi3OK) return status;
     for (k = 0; k < nvr; k++) {
         int kind = lookup(c, vr[k], &idx);
+#ifdef DEFECT_GET_UNWRITTEN
+        if (READ_AIMED(c, kind)) continue;                /* values[k] left as the caller had it */
+#endif
         values[k] = *slot(c, kind, idx);
+#ifdef DEFECT_GET_NAN
+        if (READ_AIMED(c, kind)) values[k] = NAN;
+#endif
 #ifdef DEFECT_INITIAL_UNDECLARED
         /* only as read in Initialization Mode: the stored y[0] is untouched */
         if (kind == K_Y && idx == 0 && c->d.state == InitializationMode && NX > 0)
@@ -1295,6 +1355,9 @@ fmi3Status fmi3SetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], 
 #endif
         *slot(c, kind, idx) = values[k];
     }
+#if defined(DEFECT_SET_KEEPS_CACHE) && KEEPS_CACHE_ON == 3
+    if (READ_MODE(c) && c->d.state == ContinuousTimeMode) return fmi3OK;
+#endif
     if (nvr) changed(&c->d);
     return fmi3OK;
 }
@@ -1441,6 +1504,9 @@ fmi3Status fmi3SetTime(fmi3Instance instance, fmi3Float64 time) {
 #endif
     if (!isfinite(time)) FAIL("fmi3SetTime: time is not finite");
     c->d.t = time;
+#if defined(DEFECT_SET_KEEPS_CACHE) && KEEPS_CACHE_ON == 1
+    if (READ_MODE(c)) return fmi3OK;   /* the cache is keyed on the states only */
+#endif
     changed(&c->d);
     return fmi3OK;
 }
@@ -1449,6 +1515,9 @@ fmi3Status fmi3SetContinuousStates(fmi3Instance instance, const fmi3Float64 x[],
     BEGIN("fmi3SetContinuousStates", ContinuousTimeMode);
     if (nx != (size_t)NX || (nx && !x)) FAIL("fmi3SetContinuousStates: expected %d states", NX);
     memcpy(c->x, x, nx * sizeof(double));
+#if defined(DEFECT_SET_KEEPS_CACHE) && KEEPS_CACHE_ON == 2
+    if (READ_MODE(c)) return fmi3OK;
+#endif
     changed(&c->d);
     return fmi3OK;
 }
@@ -1469,6 +1538,9 @@ fmi3Status fmi3GetContinuousStateDerivatives(fmi3Instance instance, fmi3Float64 
 #endif
     if ((status = update(c)) != fmi3OK) return status;
     memcpy(der, c->der, nx * sizeof(double));
+#ifdef DEFECT_VECTOR_DERIVATIVES
+    if (nx && READ_MODE(c)) der[nx - 1] += 1e-6 * (1.0 + fabs(der[nx - 1]));
+#endif
     return fmi3OK;
 }
 
@@ -1476,6 +1548,9 @@ fmi3Status fmi3GetContinuousStates(fmi3Instance instance, fmi3Float64 x[], size_
     BEGIN("fmi3GetContinuousStates", RUNNING);
     if (nx != (size_t)NX || (nx && !x)) FAIL("fmi3GetContinuousStates: expected %d states", NX);
     memcpy(x, c->x, nx * sizeof(double));
+#ifdef DEFECT_VECTOR_STATES
+    if (nx && READ_MODE(c)) x[nx - 1] += 1e-6 * (1.0 + fabs(x[nx - 1]));
+#endif
     return fmi3OK;
 }
 
@@ -1483,7 +1558,19 @@ fmi3Status fmi3GetNominalsOfContinuousStates(fmi3Instance instance, fmi3Float64 
                                              size_t nx) {
     BEGIN("fmi3GetNominalsOfContinuousStates", Instantiated | RUNNING);
     if (nx != (size_t)NX || (nx && !nominals)) FAIL("fmi3GetNominalsOfContinuousStates: expected %d", NX);
+#ifdef DEFECT_NOMINAL_UNWRITTEN
+    if (nx) { memcpy(nominals + 1, MODEL.x_nominal + 1, (nx - 1) * sizeof(double)); return fmi3OK; }
+#endif
     memcpy(nominals, MODEL.x_nominal, nx * sizeof(double));
+#ifdef DEFECT_NOMINAL_INVALID
+#ifndef NOMINAL_VALUE
+#define NOMINAL_VALUE 0.0
+#endif
+    if (nx && READ_MODE(c)) nominals[0] = NOMINAL_VALUE;
+#endif
+#ifdef DEFECT_NOMINAL_NOT_XML
+    if (nx && READ_MODE(c)) nominals[0] *= 1.1;   /* the binary's own nominal, not the XML's */
+#endif
     return fmi3OK;
 }
 

@@ -13,7 +13,7 @@ import pytest
 
 from bench.mutation.campaign import Cache, Runner, run_mutant
 from bench.mutation.cli import main
-from bench.mutation.checking import CheckResult, outcome, read_findings
+from bench.mutation.checking import MAIN, SETTINGS, CheckResult, Setting, outcome, read_findings
 from bench.mutation.generate import Mutant, _parse, generate, sample
 from bench.mutation.oracle import differences
 from bench.mutation.report import classify, tally, unexplained
@@ -64,9 +64,20 @@ def test_a_mutant_that_does_not_compile_is_stillborn(runner, old, new):
     assert rec["outcome"] == "stillborn" and rec["build_detail"]
 
 
-def test_a_survivor_needs_a_verdict_that_the_evidence_does_not_contradict(runner):
-    # The binary's nominal of x differs from the XML's (1): a promise the campaign derives and
-    # lsdae does not check (start values, the first survivor of this test, are checked now).
+def test_the_nominal_mutant_is_killed_by_state_nominal_not_xml(runner):
+    # The binary's nominal of x differs from the XML's (1): a survivor of the first campaign,
+    # closed by state-nominal-not-xml (DAE716).
+    rec = run_mutant(runner, mutant(".x_nominal = {1.0}", ".x_nominal = {2.0}"))
+    assert rec["outcome"] == "killed"
+    assert [code for code, _, _ in rec["killed_by"]] == ["DAE716"]
+
+
+def test_a_survivor_needs_a_verdict_that_the_evidence_does_not_contradict(runner, monkeypatch):
+    # The same mutant with state-nominal-not-xml ignored: a promise the campaign derives and
+    # the check (so configured) does not see, as a survivor lsdae misses has.
+    main = SETTINGS[MAIN]
+    monkeypatch.setitem(SETTINGS, MAIN, Setting(main.name, main.label,
+                                                (*main.args, "--ignore", "DAE716")))
     guess = ".x_nominal = {1.0}"
     rec = run_mutant(runner, mutant(guess, ".x_nominal = {2.0}"))
     assert rec["outcome"] == "survived"

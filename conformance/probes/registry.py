@@ -26,6 +26,8 @@ FAMILIES: dict[str, tuple[str, ...]] = {
     "invariants": ("DAE806",),
     "importer_paths": ("DAE730", "DAE731"),
     "event_indicators": ("DAE732", "DAE733"),
+    "events": ("DAE734", "DAE735", "DAE736", "DAE737"),
+    "rare_calls": ("DAE738", "DAE739"),
     "initial_unknowns": ("DAE750", "DAE751", "DAE752"),
     "endurance": ("DAE760", "DAE761", "DAE762"),
 }
@@ -39,6 +41,10 @@ ENDURANCE: frozenset[str] = frozenset(FAMILIES["endurance"])
 
 #: Run first: what a fresh instance holds is read before any other instance was freed.
 FIRST: frozenset[str] = frozenset(FAMILIES["start_values"])
+
+#: Run after every other probe but the endurance ones: illegal calls, each on a fresh instance,
+#: so that an FMU that crashes on one has already been probed for everything else.
+LAST: frozenset[str] = frozenset(FAMILIES["rare_calls"])
 
 
 class _Probes(Mapping[str, "Probe"]):

@@ -74,6 +74,17 @@
  *   DEFECT_LEAK                    fmi3GetFloat64 keeps 1 KiB on every call, never freed
  *   DEFECT_GLOBAL_STATE            the states x live in one C global shared by every instance
  *   DEFECT_STALE_STATES            a new instance starts from the states of the last one freed
+ * and for the event and call probes (tests/fixtures/defects/events.py):
+ *   DEFECT_EVENT_OUTPUTS_UNWRITTEN fmi3UpdateDiscreteStates returns fmi3OK without running the
+ *                                  event or writing its output arguments
+ *   DEFECT_NEXT_EVENT_PAST=<dt>    nextEventTime = t - dt announced whenever the model announces none
+ *   DEFECT_EVENT_STALE             a change of the discrete variables is not noticed (values read
+ *                                  at the event instant are those before it)
+ *   DEFECT_STATES_CHANGED_SPURIOUS valuesOfContinuousStatesChanged is true at every event
+ *   DEFECT_STOP_TIME_REFUSED       fmi3EnterInitializationMode refuses any defined stop time
+ *   DEFECT_SETBOOLEAN_ANY_VR       fmi3SetBoolean takes any value reference for the switch
+ *   DEFECT_KNOWN_UNCHECKED         a directional/adjoint known that is no known is taken as x[0]
+ *   DEFECT_SEED_SIZE_UNCHECKED     nSeed and nSensitivity are not checked against the counts
  */
 #include <math.h>
 #include <stdarg.h>
@@ -626,6 +637,9 @@ static int known_col(const Instance *c, fmi3ValueReference vr) {
     if (kind == K_U) return NX + NW + i;
     if (kind == K_TIME) return NX + NW + NU;
     if (kind == K_W && !fmu_computes_w(c)) return NX + i;
+#ifdef DEFECT_KNOWN_UNCHECKED
+    if (kind != K_NONE && NX > 0) return 0;   /* any variable is taken as the first state */
+#endif
     return -1;
 }
 
@@ -694,8 +708,10 @@ static fmi3Status partial_derivatives(fmi3Instance instance, const char *fn, int
     int total;
     fmi3Status status;
     BEGIN(fn, RUNNING);
+#ifndef DEFECT_SEED_SIZE_UNCHECKED
     if (nSeed != (adj ? nU : nK) || nSens != (adj ? nK : nU))
         FAIL("%s: nSeed/nSensitivity do not match the numbers of knowns/unknowns", fn);
+#endif
     if ((nU && !unknowns) || (nK && !knowns) || (nSeed && !seed) || (nSens && !sens))
         FAIL("%s: NULL argument", fn);
     for (i = 0; i < nU; i++)
@@ -1126,6 +1142,9 @@ fmi3Status fmi3EnterInitializationMode(fmi3Instance instance, fmi3Boolean tolera
     BEGIN("fmi3EnterInitializationMode", Instantiated);
     (void)toleranceDefined; (void)tolerance;
     if (stopTimeDefined && stopTime < startTime) FAIL("stopTime < startTime");
+#ifdef DEFECT_STOP_TIME_REFUSED
+    if (stopTimeDefined) FAIL("fmi3EnterInitializationMode: a stop time is not supported");
+#endif
     c->d.t = startTime;
     c->d.state = InitializationMode;
     changed(&c->d);
@@ -1317,8 +1336,12 @@ fmi3Status fmi3SetBoolean(fmi3Instance instance, const fmi3ValueReference vr[], 
     int idx;
     BEGIN("fmi3SetBoolean", ANY_STATE);
     if (nvr != nValues) FAIL("fmi3SetBoolean: nValues != nValueReferences");
+#ifndef DEFECT_SETBOOLEAN_ANY_VR
     for (k = 0; k < nvr; k++)
         if (lookup(c, vr[k], &idx) != K_ENABLE) FAIL("fmi3SetBoolean: no Boolean variable %u", (unsigned)vr[k]);
+#else
+    (void)idx;
+#endif
     if (nvr && !(c->d.state == ConfigurationMode ||
                  (c->d.state == ReconfigurationMode && MODEL.enable_tunable)))
         FAIL("fmi3SetBoolean: the structural parameter %u cannot be set in %s",
@@ -1399,6 +1422,13 @@ fmi3Status fmi3UpdateDiscreteStates(fmi3Instance instance, fmi3Boolean *discrete
     fmi3Status status;
     BEGIN("fmi3UpdateDiscreteStates", EventMode);
     memset(&ev, 0, sizeof ev);
+#ifdef DEFECT_EVENT_OUTPUTS_UNWRITTEN
+    (void)i; (void)d_changed; (void)x_changed; (void)status;
+    (void)discreteStatesNeedUpdate; (void)terminateSimulation; (void)nextEventTime;
+    (void)nominalsOfContinuousStatesChanged; (void)valuesOfContinuousStatesChanged;
+    (void)nextEventTimeDefined;
+    return fmi3OK;   /* a stub: no event is handled and no output argument written */
+#endif
     if (MODEL.event) {
         /* the hook sees the w the FMU solved (ODE mode) or the importer set (DAE mode) */
         if ((status = update(c)) != fmi3OK) return status;
@@ -1407,12 +1437,24 @@ fmi3Status fmi3UpdateDiscreteStates(fmi3Instance instance, fmi3Boolean *discrete
         MODEL.event(c->d.t, c->x, c->w, c->u, c->disc, &ev);
         for (i = 0; i < ND; i++) d_changed |= c->disc[i] != c->dsave[i];
         for (i = 0; i < NX; i++) x_changed |= c->x[i] != c->xsave[i];
+#ifdef DEFECT_EVENT_STALE
+        d_changed = 0;   /* the change of d goes unnoticed: no update, no fresh evaluation */
+#endif
         if (d_changed || x_changed) {
             changed(&c->d);
             logmsg(c, fmi3OK, "t=%g: event%s%s", c->d.t, d_changed ? ", discrete variables "
                    "changed" : "", x_changed ? ", states re-initialised" : "");
         }
     }
+#ifdef DEFECT_STATES_CHANGED_SPURIOUS
+    x_changed = 1;   /* "the states changed" at every event */
+#endif
+#ifdef DEFECT_NEXT_EVENT_PAST
+    if (!ev.next_time_defined) {   /* an event "at" a time already passed */
+        ev.next_time_defined = fmi3True;
+        ev.next_time = c->d.t - (DEFECT_NEXT_EVENT_PAST);
+    }
+#endif
     if (discreteStatesNeedUpdate) *discreteStatesNeedUpdate = d_changed ? fmi3True : fmi3False;
     if (terminateSimulation) *terminateSimulation = ev.terminate ? fmi3True : fmi3False;
     if (nominalsOfContinuousStatesChanged) *nominalsOfContinuousStatesChanged = fmi3False;

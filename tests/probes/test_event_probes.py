@@ -1,0 +1,100 @@
+"""The Event Mode probes (DAE734-DAE737) and the calls never made before (DAE738, DAE739), each
+against a family of its defect: other scenes (with and without events), both modes, other
+sizes, other calls. tests/probes/test_defects.py holds one member of each family; the clean
+scenes and the corpus, which must trigger none of them, are tests/probes/test_clean_scenes.py
+and the last test here."""
+from __future__ import annotations
+
+import pytest
+
+from conformance.run.engine import EngineOptions, check_fmu
+from tests.fixtures import build_scene, corpus_names
+
+EVENT_RULES = ("DAE734", "DAE735", "DAE736", "DAE737", "DAE738", "DAE739")
+
+
+def _findings(scene: str, *defines: str, may_skip: tuple[str, ...] = ()
+              ) -> dict[str, list[dict]]:
+    """code -> evidence of each finding of the event and call rules (only those run); every
+    one of them runs but ``may_skip``."""
+    report = check_fmu(build_scene(scene, defines=list(defines)),
+                       options=EngineOptions(probes=True, select=EVENT_RULES, endurance="off"))
+    out: dict[str, list[dict]] = {}
+    for f in report.findings:
+        out.setdefault(f.code, []).append(dict(f.evidence))
+    skipped = [code for code, _ in report.rules_skipped
+               if code in EVENT_RULES and code not in may_skip]
+    assert not skipped, report.rules_skipped
+    return out
+
+
+def _modes(found: dict[str, list[dict]], code: str) -> set[str]:
+    return {e["mode"] for e in found.get(code, [])}
+
+
+@pytest.mark.parametrize("scene", ["EventDAE", "SimpleDAE", "Robertson"])
+def test_unwritten_update_outputs_in_both_modes_with_and_without_events(scene):
+    # no iteration completes, so there is nothing to compare for values-stale-after-event
+    found = _findings(scene, "DEFECT_EVENT_OUTPUTS_UNWRITTEN", may_skip=("DAE736",))
+    assert set(found) == {"DAE734"}, found
+    assert _modes(found, "DAE734") == {"dae", "ode"}
+    assert all("discreteStatesNeedUpdate" in e["unwritten"] for e in found["DAE734"])
+
+
+@pytest.mark.parametrize("dt", ["0", "1e-9", "0.1", "100"])
+@pytest.mark.parametrize("scene", ["EventDAE", "SimpleDAE", "HelloWorldDAE"])
+def test_next_event_time_at_or_before_now_whatever_how_far(scene, dt):
+    found = _findings(scene, f"DEFECT_NEXT_EVENT_PAST={dt}")
+    assert set(found) == {"DAE735"}, found
+    assert _modes(found, "DAE735") == {"dae", "ode"}
+    for e in found["DAE735"]:
+        assert e["next_event_time"] <= e["t"]
+        assert e["t"] - e["next_event_time"] == pytest.approx(float(dt), abs=1e-12)
+
+
+def test_values_stale_after_the_event_in_both_modes():
+    found = _findings("EventDAE", "DEFECT_EVENT_STALE")
+    assert set(found) == {"DAE736"}, found
+    assert _modes(found, "DAE736") == {"dae", "ode"}
+    for e in found["DAE736"]:
+        assert e["t"] >= 0.75 - 1e-12           # the time event, where b switches
+        assert abs(e["at_event"] - e["fresh"]) > e["tolerance"]
+
+
+@pytest.mark.parametrize("scene", ["EventDAE", "SimpleDAE", "Robertson"])
+def test_spurious_states_changed_flag_with_and_without_events(scene):
+    found = _findings(scene, "DEFECT_STATES_CHANGED_SPURIOUS")
+    assert set(found) == {"DAE737"}, found
+    assert _modes(found, "DAE737") == {"dae", "ode"}
+
+
+@pytest.mark.parametrize("scene", ["SimpleDAE", "EventDAE", "Robertson"])
+def test_stop_time_refused_in_every_mode(scene):
+    found = _findings(scene, "DEFECT_STOP_TIME_REFUSED")
+    assert set(found) == {"DAE738"}, found
+    assert _modes(found, "DAE738") == {"dae", "ode"}
+    assert all(e["stop_time"] > e["start_time"] for e in found["DAE738"])
+
+
+@pytest.mark.parametrize("define, calls, spec", [
+    ("DEFECT_SETBOOLEAN_ANY_VR", {"fmi3SetBoolean"}, {"SG-09"}),
+    ("DEFECT_KNOWN_UNCHECKED", {"fmi3GetDirectionalDerivative", "fmi3GetAdjointDerivative"},
+     {"PD-05"}),
+    ("DEFECT_SEED_SIZE_UNCHECKED",
+     {"fmi3GetDirectionalDerivative", "fmi3GetAdjointDerivative"}, {"PD-01"}),
+])
+@pytest.mark.parametrize("scene", ["SimpleDAE", "EventDAE"])
+def test_each_illegal_call_accepted_is_found(scene, define, calls, spec):
+    found = _findings(scene, define)
+    assert set(found) == {"DAE739"}, found
+    assert {e["call"] for e in found["DAE739"]} == calls
+    assert {e["spec"] for e in found["DAE739"]} == spec
+    if define != "DEFECT_SETBOOLEAN_ANY_VR":
+        assert _modes(found, "DAE739") == {"dae", "ode"}
+
+
+@pytest.mark.parametrize("scene", ["EventDAE", "SimpleDAE", *corpus_names()])
+def test_correct_fmus_trigger_none(scene):
+    report = check_fmu(build_scene(scene),
+                       options=EngineOptions(probes=True, select=EVENT_RULES, endurance="off"))
+    assert report.findings == (), [(f.code, f.message) for f in report.findings]

@@ -22,7 +22,7 @@ import numpy as np
 from ..report.findings import Location, Violation, evidence
 from ..model.description import MODEL_DESCRIPTION
 from ..numerics.events import MAX_UPDATES
-from .api import ProbeContext, ProbeSkipped
+from .api import NEXT_EVENT_FAULT, ProbeContext, ProbeSkipped, noted
 from .common import close, error_evidence, layout_of, var_location
 from .event_walk import Walk, walks
 from .jacobian_layout import MODE_NAMES
@@ -155,7 +155,7 @@ def states_changed_flag_spurious(ctx: ProbeContext) -> Iterator[Violation]:
 
 PROBES = {
     "DAE734": event_update_invalid,
-    "DAE735": next_event_time_not_ahead,
+    "DAE735": noted(NEXT_EVENT_FAULT, "DAE735", next_event_time_not_ahead),
     "DAE736": values_stale_after_event,
     "DAE737": states_changed_flag_spurious,
 }

@@ -22,7 +22,7 @@ FAMILIES: dict[str, tuple[str, ...]] = {
     "evaluation": ("DAE723", "DAE724", "DAE725"),
     "derivatives": ("DAE740", "DAE741", "DAE742", "DAE743", "DAE744"),
     "dgdw": ("DAE745", "DAE746", "DAE747"),
-    "simulation": ("DAE801", "DAE802", "DAE803", "DAE804", "DAE805"),
+    "simulation": ("DAE801", "DAE802", "DAE803", "DAE804", "DAE805", "DAE807"),
     "invariants": ("DAE806",),
     "importer_paths": ("DAE730", "DAE731"),
     "event_indicators": ("DAE732", "DAE733"),

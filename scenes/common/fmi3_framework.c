@@ -85,6 +85,7 @@
  *   DEFECT_SETBOOLEAN_ANY_VR       fmi3SetBoolean takes any value reference for the switch
  *   DEFECT_KNOWN_UNCHECKED         a directional/adjoint known that is no known is taken as x[0]
  *   DEFECT_SEED_SIZE_UNCHECKED     nSeed and nSensitivity are not checked against the counts
+ *   DEFECT_CRASH_ON_ILLEGAL_KNOWN  an output given as a known dereferences NULL (crash)
  */
 #include <math.h>
 #include <stdarg.h>
@@ -639,6 +640,9 @@ static int known_col(const Instance *c, fmi3ValueReference vr) {
     if (kind == K_W && !fmu_computes_w(c)) return NX + i;
 #ifdef DEFECT_KNOWN_UNCHECKED
     if (kind != K_NONE && NX > 0) return 0;   /* any variable is taken as the first state */
+#endif
+#ifdef DEFECT_CRASH_ON_ILLEGAL_KNOWN
+    if (kind == K_Y) { volatile double *nowhere = NULL; return (int)*nowhere; }   /* crash */
 #endif
     return -1;
 }

@@ -108,6 +108,17 @@ def test_each_illegal_call_accepted_is_found(scene, define, calls, spec):
         assert _modes(found, "DAE739") == {"dae", "ode"}
 
 
+def test_a_crash_on_an_illegal_call_is_the_binarys_crash_after_every_other_probe():
+    report = check_fmu(build_scene("SimpleDAE", defines=["DEFECT_CRASH_ON_ILLEGAL_KNOWN"]),
+                       options=EngineOptions(probes=True, endurance="off"))
+    crashes = [dict(f.evidence) for f in report.findings if f.code == "DAE701"]
+    assert [f.code for f in report.findings] == ["DAE701"], report.findings
+    assert crashes[0]["call"] in ("fmi3GetDirectionalDerivative", "fmi3GetAdjointDerivative")
+    assert crashes[0]["probe"] == "DAE739"
+    # every other probe ran first, on a binary that had not crashed yet
+    assert {"DAE734", "DAE738", "DAE740", "DAE741", "DAE801", "DAE805"} <= set(report.rules_run)
+
+
 @pytest.mark.parametrize("scene", ["EventDAE", "SimpleDAE", *corpus_names()])
 def test_correct_fmus_trigger_none(scene):
     report = check_fmu(build_scene(scene),

@@ -163,9 +163,9 @@ def illegal_call_accepted(ctx: ProbeContext) -> Iterator[Violation]:
                 inst.free()
             if error is None:
                 yield Violation(
-                    f"{what} returns fmi3OK ({MODE_NAMES[mode]}): an illegal call should give "
-                    "fmi3Error; an importer's mistake goes unnoticed and the FMU computes with "
-                    "what it was not given", var_location(ctx, vr),
+                    f"{what} is accepted ({MODE_NAMES[mode]}; fmi3OK or fmi3Warning): an "
+                    "illegal call should give fmi3Error; an importer's mistake goes unnoticed "
+                    "and the FMU computes with what it was not given", var_location(ctx, vr),
                     evidence(mode=mode, spec=spec, call=what.split(" ")[0]),
                     subject=layout.name(vr))
     if not tried:

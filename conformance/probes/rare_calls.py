@@ -1,8 +1,8 @@
 """Calls importers make that the other probes never make (DAE738, DAE739).
 
     stop-time-refused       fmi3EnterInitializationMode refuses stopTimeDefined = true with the
-                            stop time of the FMU's own experiment (fmpy's simulate_fmu passes
-                            it; error)
+                            stop time of the FMU's own experiment, or one just after the start
+                            without a DefaultExperiment (fmpy's simulate_fmu passes it; error)
     illegal-call-accepted   an illegal call returns fmi3OK: fmi3SetBoolean on a Float64
                             variable, an output given as a known of a partial derivative, an
                             nSeed or nSensitivity that does not match the value references
@@ -39,12 +39,12 @@ def _where(ctx: ProbeContext) -> Location:
 
 def stop_time_refused(ctx: ProbeContext) -> Iterator[Violation]:
     """SM-05 (derived): fmi3EnterInitializationMode takes stopTimeDefined; a stop time inside the
-    FMU's own experiment (DefaultExperiment, else start + 1) is accepted in every mode in which
-    the FMU initialises without one."""
+    FMU's own experiment (the DefaultExperiment's, else just after the start) is accepted in
+    every mode in which the FMU initialises without one."""
     layout = layout_of(ctx)
     library = ctx.facts["library"]
     t0 = layout.start_time
-    stop = stop_time(ctx, t0)
+    stop = _own_stop_time(ctx, t0)
     tried = 0
     for mode in layout.modes:
         held = getattr(ctx, mode)
@@ -73,6 +73,16 @@ def stop_time_refused(ctx: ProbeContext) -> Iterator[Violation]:
             inst.free()
     if not tried:
         raise ProbeSkipped("no mode initialises without a stop time")
+
+
+def _own_stop_time(ctx: ProbeContext, start: float) -> float:
+    """The DefaultExperiment's stopTime; without one, a stop time just after ``start`` (a
+    window no FMU that initialises at ``start`` can call outside its validity)."""
+    stop = stop_time(ctx, start)
+    experiment = getattr(ctx.model, "default_experiment", None)
+    if getattr(experiment, "stop_time", None) != stop:
+        return start + 1e-6 * max(1.0, abs(start))
+    return stop
 
 
 def _refused(action: Callable[[], Any]) -> FmiError | None:

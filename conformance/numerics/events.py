@@ -26,6 +26,7 @@ from .settings import FMU_FAILED
 
 MAX_UPDATES = 100        # fmi3UpdateDiscreteStates calls at one event before we give up
 LISTED_EVENTS = 1000     # event times kept in the trajectory (all are counted)
+LISTED_BEHIND = 10       # nextEventTimes at or before their event kept (all are counted)
 STATE, TIME = "state", "time"
 
 
@@ -71,6 +72,7 @@ class Outcome:
     next_time: float | None
     updates: int
     states_changed: bool
+    announced: float | None = None   # the nextEventTime the FMU gave, ahead or not
 
 
 @dataclass
@@ -86,6 +88,10 @@ class EventLog:
     updates: int = 0
     terminated_at: float | None = None
     residual_jump: float = 0.0
+    # (t, nextEventTime) of the events whose announced next time event was not ahead (the
+    # first LISTED_BEHIND), and how many there were: the run drops them (``_future``)
+    behind: list[tuple[float, float]] = field(default_factory=list)
+    behind_count: int = 0
 
     def add(self, kind: str, t: float, outcome: Outcome) -> None:
         if kind == STATE:
@@ -94,6 +100,11 @@ class EventLog:
             self.time += 1
         if len(self.times) < LISTED_EVENTS:
             self.times.append(float(t))
+        announced = outcome.announced
+        if announced is not None and not outcome.terminate and announced <= t:
+            self.behind_count += 1
+            if len(self.behind) < LISTED_BEHIND:
+                self.behind.append((float(t), float(announced)))
         self.updates += outcome.updates
         if outcome.terminate:
             self.terminated_at = float(t)
@@ -145,7 +156,15 @@ def event_update(system: EventSystem, t: float, y: np.ndarray, *,
     if not np.all(np.isfinite(out)):
         raise Stop(FMU_FAILED, f"the states after the event at t = {t:.10g} are not finite",
                    t, call="fmi3GetContinuousStates", status="NaN or Inf")
-    return Outcome(out, False, _future(update.next_time, t), updates, changed)
+    return Outcome(out, False, _future(update.next_time, t), updates, changed,
+                   _announced(update.next_time))
+
+
+def _announced(next_time: float | None) -> float | None:
+    """The nextEventTime as the FMU gave it, when defined and a number."""
+    if next_time is None or not np.isfinite(next_time):
+        return None
+    return float(next_time)
 
 
 def _future(next_time: float | None, t: float) -> float | None:
@@ -198,6 +217,7 @@ def summarise(log: EventLog, traj: Any) -> None:
     traj.indicators, traj.state_events, traj.time_events = log.indicators, log.state, log.time
     traj.event_times, traj.event_updates = list(log.times), log.updates
     traj.terminated_at, traj.residual_jump = log.terminated_at, log.residual_jump
+    traj.events_behind, traj.events_behind_count = list(log.behind), log.behind_count
     if log.terminated_at is not None and traj.ok:
         traj.message = (f"the FMU ended the run at t = {log.terminated_at:.10g} "
                         "(terminateSimulation)")

@@ -133,6 +133,9 @@ class Trajectory:
     event_updates: int = 0
     terminated_at: float | None = None
     residual_jump: float = 0.0
+    # (t, nextEventTime) of events that announced a next time event not ahead (the first few)
+    events_behind: list[tuple[float, float]] = field(default_factory=list)
+    events_behind_count: int = 0
 
     @property
     def ok(self) -> bool:
@@ -178,6 +181,9 @@ class Trajectory:
                 "time": self.time_events, "times": [float(t) for t in self.event_times],
                 "updates": self.event_updates, "terminated_at": self.terminated_at,
                 "residual_jump": self.residual_jump}
+            if self.events_behind_count:  # only then: other reports stay as they were
+                info["events"]["behind"] = [[float(t), float(n)] for t, n in self.events_behind]
+                info["events"]["behind_count"] = self.events_behind_count
         if timing:
             info["wall_s"] = round(self.wall_s, 6)
         return info
@@ -224,7 +230,9 @@ def _events_from(events: Any) -> dict[str, Any]:
             "event_times": [float(t) for t in events.get("times") or ()],
             "event_updates": int(events.get("updates", 0)),
             "terminated_at": None if end is None else float(end),
-            "residual_jump": float(events.get("residual_jump") or 0.0)}
+            "residual_jump": float(events.get("residual_jump") or 0.0),
+            "events_behind": [(float(t), float(n)) for t, n in events.get("behind") or ()],
+            "events_behind_count": int(events.get("behind_count") or 0)}
 
 
 def _json_float(value: Any) -> float | None:

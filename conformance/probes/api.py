@@ -30,8 +30,8 @@ from ..model.description import ModelDescription
 from ..runtime.errors import FmiError, Unavailable
 from ..runtime.point import Evaluator, Point
 
-__all__ = ["EVENT_INDICATOR_FAULT", "Evaluator", "FmiError", "INFO_KEYS", "ODE_DAE_FAULT",
-           "PLANNED", "Point", "Probe", "ProbeContext", "ProbeSkipped", "noted"]
+__all__ = ["EVENT_INDICATOR_FAULT", "Evaluator", "FmiError", "INFO_KEYS", "NEXT_EVENT_FAULT",
+           "ODE_DAE_FAULT", "PLANNED", "Point", "Probe", "ProbeContext", "ProbeSkipped", "noted"]
 
 
 # A probe that cannot run on this FMU raises ProbeSkipped; the message is the reason, reported in
@@ -74,6 +74,9 @@ Probe = Callable[..., Iterable[Violation]]
 # trajectory comparison reads before leaving a gap at the initial point to it.
 EVENT_INDICATOR_FAULT = "event_indicators.fault"
 ODE_DAE_FAULT = "ode_dae.fault"
+# the first finding of next-event-time-not-ahead, which the simulation's
+# next-event-time-behind-during-simulation reads before reporting the same fault again
+NEXT_EVENT_FAULT = "events.next_event_time"
 # The codes this worker runs (a frozenset): a probe may leave a verdict to another rule only when
 # that rule is to run.
 PLANNED = "planned"

@@ -22,11 +22,13 @@ FAMILIES: dict[str, tuple[str, ...]] = {
     "evaluation": ("DAE723", "DAE724", "DAE725"),
     "derivatives": ("DAE740", "DAE741", "DAE742", "DAE743", "DAE744"),
     "dgdw": ("DAE745", "DAE746", "DAE747"),
-    "simulation": ("DAE801", "DAE802", "DAE803", "DAE804", "DAE805"),
+    "simulation": ("DAE801", "DAE802", "DAE803", "DAE804", "DAE805", "DAE807"),
     "invariants": ("DAE806",),
     "importer_paths": ("DAE730", "DAE731"),
     "readback": ("DAE714", "DAE715", "DAE716", "DAE717"),
     "event_indicators": ("DAE732", "DAE733"),
+    "events": ("DAE734", "DAE735", "DAE736", "DAE737"),
+    "rare_calls": ("DAE738", "DAE739"),
     "initial_unknowns": ("DAE750", "DAE751", "DAE752"),
     "endurance": ("DAE760", "DAE761", "DAE762"),
 }
@@ -40,6 +42,10 @@ ENDURANCE: frozenset[str] = frozenset(FAMILIES["endurance"])
 
 #: Run first: what a fresh instance holds is read before any other instance was freed.
 FIRST: frozenset[str] = frozenset(FAMILIES["start_values"])
+
+#: Run after every other probe but the endurance ones: illegal calls, each on a fresh instance,
+#: so that an FMU that crashes on one has already been probed for everything else.
+LAST: frozenset[str] = frozenset(FAMILIES["rare_calls"])
 
 
 class _Probes(Mapping[str, "Probe"]):

@@ -45,7 +45,7 @@ from ..report.findings import Violation
 from ..model.layer import describe_fmu
 from ..runtime.host import host_platform_tuple, library_extension
 from .driver import RUNNER_RULES, Driver
-from .registry import ENDURANCE, FAMILY_OF, FIRST
+from .registry import ENDURANCE, FAMILY_OF, FIRST, LAST
 
 log = logging.getLogger(__name__)
 
@@ -173,7 +173,8 @@ class _Run:
         # the start values first, before any instance was freed; the endurance probes last:
         # what sustained use does to the FMU (a late crash, state in C globals) must not change
         # the other probes' verdicts
-        probes.sort(key=lambda rule: (rule.code in ENDURANCE, rule.code not in FIRST))
+        probes.sort(key=lambda rule: (rule.code in ENDURANCE, rule.code in LAST,
+                                      rule.code not in FIRST))
         tmp = tempfile.mkdtemp(prefix="lsdae-probe-")
         try:
             if self._extract(tmp):

@@ -12,7 +12,10 @@ shared by :mod:`.simulation_runs` so that every rule reads the same runs; here t
   or fmi3Error;
 * ``simulation-budget-exceeded``: our budget of steps ran out (a run that lsdae's wall-clock
   safety net stopped is judged by no rule: the simulation rules are not run then);
-* ``ode-dae-trajectory-mismatch``: the two modes compared at common output times.
+* ``ode-dae-trajectory-mismatch``: the two modes compared at common output times;
+* ``next-event-time-behind-during-simulation``: at an event of either run (a state event found
+  by root finding on the trajectory, or a time event) the FMU announced a nextEventTime at or
+  before the event's time, which the run could only drop.
 
 One fault, one finding: the ODE-mode run only follows a complete DAE-mode run; a run that ends
 at its first point, a dg/dw as bad at the start as where a run stopped, a failure the sampled
@@ -35,8 +38,8 @@ from ..report.findings import Location, Violation, evidence
 from ..numerics import settings as st
 from ..numerics.compare import compare
 from ..numerics.settings import Settings, Trajectory
-from .api import (EVENT_INDICATOR_FAULT, ODE_DAE_FAULT, PLANNED, FmiError, ProbeContext,
-                  ProbeSkipped)
+from .api import (EVENT_INDICATOR_FAULT, NEXT_EVENT_FAULT, ODE_DAE_FAULT, PLANNED, FmiError,
+                  ProbeContext, ProbeSkipped)
 from .common import layout_of, root_location
 from .simulation_runs import (OutOfTime, both_runs, points_fail, run, run_evidence,
                               settings_of, simulate_mode, time_budget)
@@ -239,10 +242,35 @@ def _confirm(ctx: ProbeContext, worst: dict[str, Any], rtol: float, *,
             "difference": abs(values[0] - values[1])}
 
 
+def next_event_time_behind_during_simulation(ctx: ProbeContext) -> Iterator[Violation]:
+    """SM-06, FMI 3.0.2 §3.1: at every event of the runs, a defined nextEventTime lies after
+    the event (the walk of next-event-time-not-ahead enters Event Mode at fixed instants only;
+    the runs reach the state events of the trajectory). One fault, one finding: when
+    next-event-time-not-ahead has reported it already, this rule leaves it there."""
+    fault = ctx.facts.get(NEXT_EVENT_FAULT)
+    if fault:
+        raise ProbeSkipped(f"next-event-time-not-ahead reports the fault already "
+                           f"({str(fault)[:160]})")
+    for traj in both_runs(ctx):
+        if not traj.events_behind:
+            continue
+        t, announced = traj.events_behind[0]
+        yield Violation(
+            f"at the event at t = {t:.17g} of the {traj.mode.upper()}-mode simulation, "
+            f"fmi3UpdateDiscreteStates announces nextEventTime = {announced:.17g}, not after "
+            f"the event ({traj.events_behind_count} such event(s) in the run): the run can "
+            "only drop it", root_location(ctx),
+            run_evidence(traj, t=t, next_event_time=announced, behind=t - announced,
+                         events_behind=[list(e) for e in traj.events_behind],
+                         count=traj.events_behind_count),
+            subject=f"{traj.mode}:nextEventTime")
+
+
 PROBES = {
     "DAE801": simulation_failed,
     "DAE802": singular_along_trajectory,
     "DAE803": evaluation_failed_during_simulation,
     "DAE804": simulation_budget_exceeded,
     "DAE805": ode_dae_trajectory_mismatch,
+    "DAE807": next_event_time_behind_during_simulation,
 }

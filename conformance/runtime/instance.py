@@ -107,6 +107,11 @@ class Instance:
         return DiscreteStates(needs, terminate, nominals, values,
                               float(next_time.value) if defined else None)
 
+    def call(self, fname: str, *args: Any) -> Any:
+        """One FMI call with raw ctypes arguments, counted and checked like every other (for
+        probes that must pass what the methods here never pass: sentinels, wrong sizes)."""
+        return self._fmi(fname, *args)
+
     def enter_continuous_time_mode(self) -> None:
         self._fmi("fmi3EnterContinuousTimeMode")
 

@@ -15,6 +15,9 @@
  * it located is the event that happens.
  * EVENTDAE_TERMINATE (a -D define): the time event asks to end the simulation
  * (terminateSimulation), for the simulation's handling of it.
+ * DEFECT_STALE_TIME_EVENT: once the state event has switched k (and x < 0.75), every event
+ * announces nextEventTime = t - 0.05, a time already past (next-event-time-behind-during-
+ * simulation: only the simulation reaches the state event).
  */
 #include "dae_model.h"
 
@@ -73,6 +76,12 @@ static void event(double t, double x[], const double w[], const double u[], doub
         ev->next_time_defined = fmi3True;
         ev->next_time = T_EVENT;
     }
+#ifdef DEFECT_STALE_TIME_EVENT
+    if (d[K] == K_HIGH && x[0] < 0.75) {   /* after the state event: a time event past */
+        ev->next_time_defined = fmi3True;
+        ev->next_time = t - 0.05;
+    }
+#endif
 }
 
 const ModelDef MODEL = {

@@ -89,6 +89,18 @@
  *   DEFECT_NOMINAL_NOT_XML         fmi3GetNominalsOfContinuousStates: the first is 1.1 times the XML's
  *   DEFECT_RESET_KEEPS_TIME        fmi3Reset keeps time and the evaluation cache
  *   DEFECT_RESET_KEEPS_GUESS       fmi3Reset keeps the algebraic variables' last values
+ * and for the event and call probes (tests/fixtures/defects/events.py):
+ *   DEFECT_EVENT_OUTPUTS_UNWRITTEN fmi3UpdateDiscreteStates returns fmi3OK without running the
+ *                                  event or writing its output arguments
+ *   DEFECT_NEXT_EVENT_PAST=<dt>    nextEventTime = t - dt announced whenever the model announces none
+ *   DEFECT_EVENT_STALE             a change of the discrete variables is not noticed (values read
+ *                                  at the event instant are those before it)
+ *   DEFECT_STATES_CHANGED_SPURIOUS valuesOfContinuousStatesChanged is true at every event
+ *   DEFECT_STOP_TIME_REFUSED       fmi3EnterInitializationMode refuses any defined stop time
+ *   DEFECT_SETBOOLEAN_ANY_VR       fmi3SetBoolean takes any value reference for the switch
+ *   DEFECT_KNOWN_UNCHECKED         a directional/adjoint known that is no known is taken as x[0]
+ *   DEFECT_SEED_SIZE_UNCHECKED     nSeed and nSensitivity are not checked against the counts
+ *   DEFECT_CRASH_ON_ILLEGAL_KNOWN  an output given as a known dereferences NULL (crash)
  */
 #include <math.h>
 #include <stdarg.h>
@@ -658,6 +670,12 @@ static int known_col(const Instance *c, fmi3ValueReference vr) {
     if (kind == K_U) return NX + NW + i;
     if (kind == K_TIME) return NX + NW + NU;
     if (kind == K_W && !fmu_computes_w(c)) return NX + i;
+#ifdef DEFECT_KNOWN_UNCHECKED
+    if (kind != K_NONE && NX > 0) return 0;   /* any variable is taken as the first state */
+#endif
+#ifdef DEFECT_CRASH_ON_ILLEGAL_KNOWN
+    if (kind == K_Y) { volatile double *nowhere = NULL; return (int)*nowhere; }   /* crash */
+#endif
     return -1;
 }
 
@@ -726,8 +744,10 @@ static fmi3Status partial_derivatives(fmi3Instance instance, const char *fn, int
     int total;
     fmi3Status status;
     BEGIN(fn, RUNNING);
+#ifndef DEFECT_SEED_SIZE_UNCHECKED
     if (nSeed != (adj ? nU : nK) || nSens != (adj ? nK : nU))
         FAIL("%s: nSeed/nSensitivity do not match the numbers of knowns/unknowns", fn);
+#endif
     if ((nU && !unknowns) || (nK && !knowns) || (nSeed && !seed) || (nSens && !sens))
         FAIL("%s: NULL argument", fn);
     for (i = 0; i < nU; i++)
@@ -1158,6 +1178,9 @@ fmi3Status fmi3EnterInitializationMode(fmi3Instance instance, fmi3Boolean tolera
     BEGIN("fmi3EnterInitializationMode", Instantiated);
     (void)toleranceDefined; (void)tolerance;
     if (stopTimeDefined && stopTime < startTime) FAIL("stopTime < startTime");
+#ifdef DEFECT_STOP_TIME_REFUSED
+    if (stopTimeDefined) FAIL("fmi3EnterInitializationMode: a stop time is not supported");
+#endif
     c->d.t = startTime;
     c->d.state = InitializationMode;
     changed(&c->d);
@@ -1380,8 +1403,12 @@ fmi3Status fmi3SetBoolean(fmi3Instance instance, const fmi3ValueReference vr[], 
     int idx;
     BEGIN("fmi3SetBoolean", ANY_STATE);
     if (nvr != nValues) FAIL("fmi3SetBoolean: nValues != nValueReferences");
+#ifndef DEFECT_SETBOOLEAN_ANY_VR
     for (k = 0; k < nvr; k++)
         if (lookup(c, vr[k], &idx) != K_ENABLE) FAIL("fmi3SetBoolean: no Boolean variable %u", (unsigned)vr[k]);
+#else
+    (void)idx;
+#endif
     if (nvr && !(c->d.state == ConfigurationMode ||
                  (c->d.state == ReconfigurationMode && MODEL.enable_tunable)))
         FAIL("fmi3SetBoolean: the structural parameter %u cannot be set in %s",
@@ -1462,6 +1489,13 @@ fmi3Status fmi3UpdateDiscreteStates(fmi3Instance instance, fmi3Boolean *discrete
     fmi3Status status;
     BEGIN("fmi3UpdateDiscreteStates", EventMode);
     memset(&ev, 0, sizeof ev);
+#ifdef DEFECT_EVENT_OUTPUTS_UNWRITTEN
+    (void)i; (void)d_changed; (void)x_changed; (void)status;
+    (void)discreteStatesNeedUpdate; (void)terminateSimulation; (void)nextEventTime;
+    (void)nominalsOfContinuousStatesChanged; (void)valuesOfContinuousStatesChanged;
+    (void)nextEventTimeDefined;
+    return fmi3OK;   /* a stub: no event is handled and no output argument written */
+#endif
     if (MODEL.event) {
         /* the hook sees the w the FMU solved (ODE mode) or the importer set (DAE mode) */
         if ((status = update(c)) != fmi3OK) return status;
@@ -1470,12 +1504,24 @@ fmi3Status fmi3UpdateDiscreteStates(fmi3Instance instance, fmi3Boolean *discrete
         MODEL.event(c->d.t, c->x, c->w, c->u, c->disc, &ev);
         for (i = 0; i < ND; i++) d_changed |= c->disc[i] != c->dsave[i];
         for (i = 0; i < NX; i++) x_changed |= c->x[i] != c->xsave[i];
+#ifdef DEFECT_EVENT_STALE
+        d_changed = 0;   /* the change of d goes unnoticed: no update, no fresh evaluation */
+#endif
         if (d_changed || x_changed) {
             changed(&c->d);
             logmsg(c, fmi3OK, "t=%g: event%s%s", c->d.t, d_changed ? ", discrete variables "
                    "changed" : "", x_changed ? ", states re-initialised" : "");
         }
     }
+#ifdef DEFECT_STATES_CHANGED_SPURIOUS
+    x_changed = 1;   /* "the states changed" at every event */
+#endif
+#ifdef DEFECT_NEXT_EVENT_PAST
+    if (!ev.next_time_defined) {   /* an event "at" a time already passed */
+        ev.next_time_defined = fmi3True;
+        ev.next_time = c->d.t - (DEFECT_NEXT_EVENT_PAST);
+    }
+#endif
     if (discreteStatesNeedUpdate) *discreteStatesNeedUpdate = d_changed ? fmi3True : fmi3False;
     if (terminateSimulation) *terminateSimulation = ev.terminate ? fmi3True : fmi3False;
     if (nominalsOfContinuousStatesChanged) *nominalsOfContinuousStatesChanged = fmi3False;

@@ -92,6 +92,9 @@ def memory_grows(ctx: ProbeContext, *, bytes_per_call_quick: float, bytes_per_ca
         raise ProbeSkipped(run.memory_note)
     if run.out_of_time():
         raise ProbeSkipped(run.out_of_time())
+    if run.stopped == "memory":
+        yield _stopped_for_memory(ctx, run, bytes_per_call, min_growth_kib)
+        return
     found = growth([c for c, _ in run.samples], [r for _, r in run.samples])
     if found is None:
         raise ProbeSkipped(f"the path run ended after {run.calls:,} FMI calls ({run.stopped}): "
@@ -112,6 +115,28 @@ def memory_grows(ctx: ProbeContext, *, bytes_per_call_quick: float, bytes_per_ca
                  sample_unit="[FMI calls, KiB grown since the first sample]",
                  method="least squares over the second half of the samples; each of its "
                         "quarters must show the rate too"))
+
+
+def _stopped_for_memory(ctx: ProbeContext, run: Any, bytes_per_call: float,
+                        min_growth_kib: float) -> Violation:
+    """The path run stopped because memory grew by ``max_growth_mib``: the growth measured up
+    to the stop is the finding, however few the samples (a fast leak takes few calls)."""
+    (first_calls, first_rss), (calls, rss) = run.samples[0], run.samples[-1]
+    grown = rss - first_rss
+    per_call = grown / max(1, calls - first_calls)
+    return Violation(
+        f"the worker's resident memory grew by {grown / (1 << 20):,.1f} MiB in "
+        f"{calls - first_calls:,} FMI calls on one instance along the path (about "
+        f"{per_call:,.0f} bytes per call), and the path run was stopped there, at "
+        f"max_growth_mib = {run.settings.max_growth_mib:g} MiB: the FMU allocates without "
+        "freeing", root_location(ctx),
+        evidence(bytes_per_call=round(per_call), growth_kib=round(grown / KIB),
+                 threshold_bytes_per_call=bytes_per_call, min_growth_kib=min_growth_kib,
+                 max_growth_mib=run.settings.max_growth_mib, calls=run.calls,
+                 stopped=run.stopped, level=run.settings.level,
+                 samples=_growth_samples(run.samples),
+                 sample_unit="[FMI calls, KiB grown since the first sample]",
+                 method="growth from the first sample to the stop, over the calls between"))
 
 
 def _growth_samples(samples: Sequence[tuple[int, int]]) -> list[list[int]]:

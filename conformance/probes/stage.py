@@ -33,7 +33,7 @@ import numpy as np
 
 from ..report.findings import Location, Violation, evidence
 from ..runtime.callrecord import CallRecord
-from ..runtime.child import memory_info, reset_peak_memory
+from ..runtime.child import memory_info, near_limit, reset_peak_memory
 from ..runtime.layout import Layout
 from ..runtime.library import Library
 from ..runtime.modes import start_initialization, start_instance
@@ -147,11 +147,10 @@ class _Stage:
         except FmiError as exc:
             skipped = exc.cause()
         except MemoryError:
-            violations.clear()
-            self.send({"event": "memory", "code": code})
-            sys.stderr.flush()
-            os._exit(MEMORY_EXIT)
+            self._out_of_memory(code)
         except Exception as exc:  # a defect of ours: report it, run the next probe
+            if near_limit():   # an import or allocation failed for want of address space
+                self._out_of_memory(code)
             violations.append(Violation(
                 f"probe {code} {name} failed: {type(exc).__name__}: {exc}",
                 evidence=evidence(rule=code, traceback=traceback.format_exc(limit=8)),
@@ -160,6 +159,14 @@ class _Stage:
                    "violations": [violation_json(v) for v in violations],
                    "skipped": skipped, "info": self._info(ctx.facts.get("info", {})),
                    "stats": _stats(started, library.calls - calls, library.seconds - inside)})
+
+
+    def _out_of_memory(self, code: str) -> None:
+        """Python ran out of address space in probe ``code``: end this worker as a memory
+        death (the driver decides whose: ``conformance.probes.deaths``)."""
+        self.send({"event": "memory", "code": code})
+        sys.stderr.flush()
+        os._exit(MEMORY_EXIT)
 
 
 # Info values a probe publishes once as a new object and never changes in place: sent again

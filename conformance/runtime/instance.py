@@ -192,6 +192,13 @@ class Instance:
                   out.ctypes.data_as(ctypes.POINTER(ctypes.c_double)), n)
         return out
 
+    def get_nominals(self, n: int) -> np.ndarray:
+        """fmi3GetNominalsOfContinuousStates for ``n`` states."""
+        out = np.zeros(n)
+        self._fmi("fmi3GetNominalsOfContinuousStates",
+                  out.ctypes.data_as(ctypes.POINTER(ctypes.c_double)), n)
+        return out
+
     def number_of_event_indicators(self) -> int:
         """fmi3GetNumberOfEventIndicators."""
         count = ctypes.c_size_t()
@@ -279,6 +286,16 @@ class Instance:
         callers that set time, states and algebraic variables themselves (the simulation)."""
         return self._derivative("fmi3GetDirectionalDerivative", unknowns, knowns, seed,
                                 len(unknowns))
+
+    def call(self, fname: str, *args: Any) -> Any:
+        """The FMI function ``fname`` on this instance with ``args`` the caller built (C arrays
+        made once and reused, for a run that makes the same call many times)."""
+        return self._fmi(fname, *args)
+
+    def adjoint_as_set(self, unknowns: Sequence[int], knowns: Sequence[int],
+                       seed: np.ndarray) -> np.ndarray:
+        """fmi3GetAdjointDerivative at the values already set (see :meth:`directional_as_set`)."""
+        return self._derivative("fmi3GetAdjointDerivative", unknowns, knowns, seed, len(knowns))
 
     def variable_dependencies(self, vr: int) -> list[Dependency]:
         """The per-element dependencies of ``vr`` in the instance's current state:

@@ -9,7 +9,13 @@ Every FMI call made through a :class:`Library` goes through one choke point, ``_
 * counts the call, and the time spent inside the binary (what the FMU costs, apart from
   lsdae's own work, for the benchmarks and ``lsdae check -v``);
 * turns fmi3Discard, fmi3Error and fmi3Fatal into :class:`~conformance.runtime.errors.FmiError`
-  carrying the messages the FMU logged during that call.
+  carrying the messages the FMU logged during that call;
+* watches what the calls do to the worker's address space, once it has grown by
+  ``WATCH_FROM`` since the library was loaded (read every ``WATCH_EVERY`` calls, from
+  /proc/self/statm on Linux): from then on each call's growth is added up in the
+  CallRecord, with the call that grew it last, so that a worker that runs out of memory
+  between two FMI calls after the FMU took the memory is the binary's
+  ``binary-memory-limit``, not lsdae's own limit (``conformance.probes.deaths``).
 
 fmpy is imported lazily (it is heavy, and the worker sets its memory limit first).
 """
@@ -27,6 +33,19 @@ from .layout import Layout
 STATUS_NAMES = {0: "fmi3OK", 1: "fmi3Warning", 2: "fmi3Discard", 3: "fmi3Error", 4: "fmi3Fatal"}
 MAX_LOG_MESSAGES = 200          # per call; an FMU that floods its logger is cut off here
 MAX_MESSAGE_CHARS = 1000
+WATCH_FROM = 128 << 20          # address-space growth after which every call is watched
+WATCH_EVERY = 32                # calls between two reads of the address space until then
+_PAGE = os.sysconf("SC_PAGE_SIZE") if hasattr(os, "sysconf") else 4096
+
+
+def address_space() -> int | None:
+    """The worker's address-space size in bytes (VmSize, from /proc/self/statm; None
+    elsewhere)."""
+    try:
+        with open("/proc/self/statm", "rb") as fh:
+            return int(fh.read(64).split()[0]) * _PAGE
+    except (OSError, ValueError, IndexError):
+        return None
 
 
 _RECORDING_CLASS: Any = None
@@ -45,6 +64,9 @@ def _recording_class() -> Any:
             lsdae_log: list[str]
             lsdae_blocked: frozenset[str] = frozenset()
             lsdae_fatal = False
+            lsdae_base: int | None = None   # the address space when loaded
+            lsdae_watch = False             # every call's growth is added up
+            lsdae_grown = 0
 
             def _call(self, fname: str, *args: Any) -> Any:
                 function = self._functions[fname]
@@ -52,17 +74,35 @@ def _recording_class() -> Any:
                     raise Unavailable(f"{fname} is not called again: it did not return in an "
                                        "earlier probe (binary-timed-out)")
                 del self.lsdae_log[:]  # the log holds the messages of the last call only
+                before = self._lsdae_before()
                 self.lsdae_record.enter(fname, self.lsdae_calls + 1)
                 started = time.perf_counter()
                 result = function(*args)
                 self.lsdae_seconds += time.perf_counter() - started
                 self.lsdae_record.leave()
                 self.lsdae_calls += 1
+                if before is not None:
+                    after = address_space()
+                    if after is not None and after > before:
+                        self.lsdae_grown += after - before
+                        self.lsdae_record.grew(fname, self.lsdae_grown)
                 if function.restype is ctypes.c_int and result not in (0, 1):
                     self.lsdae_fatal = self.lsdae_fatal or result == 4
                     status = STATUS_NAMES.get(result, f"the illegal status {result}")
                     raise FmiError(fname, status, self.lsdae_log)
                 return result
+
+            def _lsdae_before(self) -> int | None:
+                """The address space before this call when calls are watched (else None);
+                every WATCH_EVERY calls, whether they must be watched from now on."""
+                if self.lsdae_watch:
+                    return address_space()
+                if self.lsdae_base is not None and self.lsdae_calls % WATCH_EVERY == 0:
+                    size = address_space()
+                    if size is not None and size - self.lsdae_base > WATCH_FROM:
+                        self.lsdae_watch = True
+                        return size
+                return None
 
         _RECORDING_CLASS = RecordingFMU3Model
     return _RECORDING_CLASS
@@ -88,6 +128,7 @@ class Library:
         self.fmu.lsdae_record = record
         self.fmu.lsdae_log = self.log
         self.fmu.lsdae_blocked = frozenset(blocked)
+        self.fmu.lsdae_base = address_space()
         resources = os.path.join(directory, "resources")
         self.resource_path = resources + os.sep if os.path.isdir(resources) else None
         self._count = 0

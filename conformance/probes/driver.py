@@ -205,6 +205,9 @@ class Driver:
         outcome = self.run.outcome
         violations = [violation_from_json(v) for v in event.get("violations") or []]
         outcome.violations.extend((code, v) for v in violations)
+        consequences = [violation_from_json(v) for v in event.get("consequences") or []]
+        outcome.consequences.extend((code, v) for v in consequences)
+        violations += consequences   # the rule ran and found something (whoever reports it)
         skipped = event.get("skipped")
         if skipped and not violations:
             outcome.skipped.add((code, str(skipped)))

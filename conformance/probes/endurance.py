@@ -31,6 +31,7 @@ from ..runtime.layout import Layout
 from .api import Point, ProbeContext, ProbeSkipped
 from .common import dae_of, layout_of, root_location, unknowns_of
 from .endurance_run import level_of, path_run, remember_settings
+from .independence import shared_violation, survey
 
 RUN_CODES = ("DAE760", "DAE761")    # the probes that judge the path run
 # the scenarios of instances-not-independent, in the order they are tried
@@ -197,19 +198,31 @@ class _Scenarios:
 
 def instances_not_independent(ctx: ProbeContext, *, cycles_quick: int, cycles_long: int,
                               seconds_quick: float, seconds_long: float, rtol: float,
-                              atol: float) -> Iterator[Violation]:
+                              atol: float, alone_copies: int,
+                              explains: Sequence[str]) -> Iterator[Violation]:
     """Instances of one FMU do not share state: a second instance beside the first, the two
     set to different points in turn, and ``cycles_<level>`` instantiate/free cycles give the
     values of the first instance at the same point (after initialisation, and at two sampled
     points), within ``atol + rtol * nominal``. ``seconds_<level>`` is a safety net: when it
     ends the cycles before a difference is found, the probe is not run (time budget). An
     instance that cannot repeat its own values (P, Q, P) is ``evaluation-not-repeatable``'s
-    finding: the probe is skipped then."""
+    finding: the probe is skipped then.
+
+    First of all, the survey of :mod:`.independence` (the process's first instance, a later
+    one and the ODE-mode ones against instances alone, each in a copy of the binary of its
+    own, ``alone_copies`` at most): a difference there is the finding. ``explains`` names the
+    rules whose findings the probe stage re-runs with every instance alone; what vanishes is
+    folded into this finding (``runner.fold_consequences``)."""
     level = level_of(ctx)
     me = ctx.model.model_exchange
     if me is not None and me.flag("canBeInstantiatedOnlyOncePerProcess"):
         raise ProbeSkipped("the FMU declares canBeInstantiatedOnlyOncePerProcess: its instances "
                            "may share state")
+    shared = survey(ctx, copies=alone_copies, rtol=rtol, atol=atol)
+    if shared.found:
+        yield shared_violation(ctx, shared, root_location(ctx), level=level, rtol=rtol,
+                               atol=atol, scale="nominal or magnitude of each value")
+        return
     cycles = int(cycles_quick if level == "quick" else cycles_long)
     seconds = float(seconds_quick if level == "quick" else seconds_long)
     dae_of(ctx)

@@ -40,6 +40,11 @@ ENDURANCE: frozenset[str] = frozenset(FAMILIES["endurance"])
 #: Run first: what a fresh instance holds is read before any other instance was freed.
 FIRST: frozenset[str] = frozenset(FAMILIES["start_values"])
 
+#: The first cause (instances-not-independent): the findings of the rules its ``explains``
+#: option lists are its consequences when they vanish with every instance alone
+#: (``conformance.probes.stage``, ``runner.fold_consequences``).
+FIRST_CAUSE = "DAE762"
+
 
 class _Probes(Mapping[str, "Probe"]):
     """The probe functions by code, each family module imported on first use."""

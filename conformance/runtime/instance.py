@@ -49,7 +49,7 @@ class Instance:
         self.initializing = False    # in Initialization Mode, where fmi3Terminate is not allowed
         self.discrete: DiscreteStates | None = None   # the update that ended initialisation
         self._callback = fmi3LogMessageCallback(library.logger(name))  # kept alive here
-        fmu = library.fmu
+        self._fmu = library.fmu_for_instance()   # the library's, or a copy of its own (alone)
         self.component = self._fmi(
             "fmi3InstantiateModelExchange", name.encode(), self.layout.token.encode(),
             library.resource_path.encode() if library.resource_path else None,
@@ -57,11 +57,10 @@ class Instance:
         if not self.component:
             raise FmiError("fmi3InstantiateModelExchange", "NULL", library.log)
         library.instances.append(self)
-        self._fmu = fmu
 
     def _fmi(self, fname: str, *args: Any, instance: bool = True) -> Any:
         self.calls += 1
-        function = getattr(self.library.fmu, fname)
+        function = getattr(self._fmu, fname)
         try:
             return function(self.component, *args) if instance else function(*args)
         except FmiError as exc:

@@ -22,12 +22,15 @@ fmpy is imported lazily (it is heavy, and the worker sets its memory limit first
 from __future__ import annotations
 
 import ctypes
+import itertools
 import os
+import shutil
 import time
 from typing import Any, Callable, Sequence
 
 from .callrecord import CallRecord
 from .errors import FmiError, Unavailable
+from .host import host_platform_tuple, library_extension
 from .layout import Layout
 
 STATUS_NAMES = {0: "fmi3OK", 1: "fmi3Warning", 2: "fmi3Discard", 3: "fmi3Error", 4: "fmi3Fatal"}
@@ -49,6 +52,7 @@ def address_space() -> int | None:
 
 
 _RECORDING_CLASS: Any = None
+_COPIES = itertools.count(1)    # the folders of the copies made by Library.alone
 
 
 def _recording_class() -> Any:
@@ -109,30 +113,80 @@ def _recording_class() -> Any:
 
 
 class Library:
-    """The FMU's binary, loaded once per worker process; the instances made from it."""
+    """The FMU's binary, loaded once per worker process; the instances made from it.
+
+    :meth:`alone` gives a twin whose every instance has a copy of the binary of its own (its own
+    C globals): what an instance computes when no other instance shares its process, the
+    reference of ``instances-not-independent`` and of the first-cause re-runs.
+    """
 
     def __init__(self, directory: str, layout: Layout, record: CallRecord, *,
-                 blocked: Sequence[str] = ()):
+                 blocked: Sequence[str] = (), copies: int = 0):
         self.layout = layout
         self.record = record
         self.directory = directory
+        self.blocked = tuple(blocked)
         self.log: list[str] = []
         self.instances: list[Any] = []  # the live Instances; each registers itself
-        cls = _recording_class()
-        # fmpy resolves every fmi3* symbol here (AR-07): a missing one raises. Loading runs
-        # the library's constructors, so it is recorded like a call.
-        record.enter("dlopen (loading the library)")
-        self.fmu = cls(guid=layout.token, modelIdentifier=layout.model_identifier,
-                       unzipDirectory=directory, instanceName="lsdae")
-        record.leave()
-        self.fmu.lsdae_record = record
-        self.fmu.lsdae_log = self.log
-        self.fmu.lsdae_blocked = frozenset(blocked)
-        self.fmu.lsdae_base = address_space()
+        self.path = os.path.join(directory, "binaries", host_platform_tuple(),
+                                 layout.model_identifier + library_extension())
+        self.copies = copies     # alone: the copies of the binary one twin may load (0: not)
+        self._loaded = 0
+        self.fmu = self._load(directory if not copies else self._copy())
         resources = os.path.join(directory, "resources")
         self.resource_path = resources + os.sep if os.path.isdir(resources) else None
         self._count = 0
         self._init_count = 0
+        self._first_taken = False
+
+    def _load(self, root: str) -> Any:
+        """The binary of the FMU unpacked at ``root`` (fmpy builds the path from it)."""
+        # fmpy resolves every fmi3* symbol here (AR-07): a missing one raises. Loading runs
+        # the library's constructors, so it is recorded like a call.
+        self.record.enter("dlopen (loading the library)")
+        fmu = _recording_class()(guid=self.layout.token,
+                                 modelIdentifier=self.layout.model_identifier,
+                                 unzipDirectory=root, instanceName="lsdae")
+        self.record.leave()
+        fmu.lsdae_record = self.record
+        fmu.lsdae_log = self.log
+        fmu.lsdae_blocked = frozenset(self.blocked)
+        fmu.lsdae_base = address_space()
+        return fmu
+
+    def _copy(self) -> str:
+        """A folder beside the FMU's whose binaries/<platform>/ holds a copy of the binary and
+        links to the files beside it (its dependencies are the same ones): the dynamic loader
+        maps a file it has not seen as a new library, with C globals of its own. Returns the
+        folder (fmpy builds the library's path from it)."""
+        if self._loaded >= self.copies:
+            raise Unavailable(f"more than {self.copies} copies of the binary would be needed "
+                              "to give every instance its own")
+        self._loaded += 1
+        root = os.path.join(os.path.dirname(os.path.abspath(self.directory)),
+                            f"lsdae-alone-{os.getpid()}-{next(_COPIES)}")
+        source = os.path.dirname(self.path)
+        target = os.path.join(root, "binaries", os.path.basename(source))
+        os.makedirs(target)
+        for name in os.listdir(source):
+            if os.path.join(source, name) != self.path:
+                os.symlink(os.path.join(source, name), os.path.join(target, name))
+        shutil.copyfile(self.path, os.path.join(target, os.path.basename(self.path)))
+        return root
+
+    def alone(self, copies: int) -> Library:
+        """A twin of this library whose every instance loads a copy of the binary of its own
+        (at most ``copies`` in all): no instance shares a C global with any other."""
+        return Library(self.directory, self.layout, self.record, blocked=self.blocked,
+                       copies=copies)
+
+    def fmu_for_instance(self) -> Any:
+        """The loaded binary a new instance calls: this library's, or, for a twin made by
+        :meth:`alone`, a copy of its own (the first instance takes the copy loaded first)."""
+        if not self.copies or not self._first_taken:
+            self._first_taken = True
+            return self.fmu
+        return self._load(self._copy())
 
     @property
     def calls(self) -> int:

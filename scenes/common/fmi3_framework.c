@@ -72,6 +72,7 @@
  *   DEFECT_LATE_ERROR              Continuous-Time Mode: every FMI call after the 5000th on an
  *                                  instance returns fmi3Error
  *   DEFECT_LATE_AFTER=<n>          the two above strike after n calls instead of 5000
+ *   DEFECT_LATE_CALL=<function>    ... and only in that FMI function
  *   DEFECT_LEAK                    fmi3GetFloat64 keeps 1 KiB on every call, never freed
  *   DEFECT_LEAK_CALL=<function>    that FMI function keeps DEFECT_LEAK_BYTES=<n> (default 1024)
  *                                  bytes on every call, never freed (the leak family)
@@ -235,21 +236,29 @@ static fmi3Status discarded(Instance *c) {
 #define FAIL(...) do { logmsg(c, fmi3Error, __VA_ARGS__); return fmi3Error; } while (0)
 
 /* The defects that need sustained use: they strike after LATE_AFTER calls on one instance
- * (DEFECT_LATE_AFTER=<n> sets another count: the family of late failures). */
+ * (DEFECT_LATE_AFTER=<n> sets another count, DEFECT_LATE_CALL=<FMI function> strikes in that
+ * function only: the family of late failures, tests/probes/test_late_family.py). */
 #ifdef DEFECT_LATE_AFTER
 #define LATE_AFTER ((unsigned long)(DEFECT_LATE_AFTER))
 #else
 #define LATE_AFTER 5000UL
 #endif
+#ifdef DEFECT_LATE_CALL
+#define LATE_NAME_(x) #x
+#define LATE_NAME(x) LATE_NAME_(x)
+#define LATE_IN(fn) (strcmp((fn), LATE_NAME(DEFECT_LATE_CALL)) == 0)
+#else
+#define LATE_IN(fn) 1
+#endif
 #if defined(DEFECT_LATE_CRASH)
 #define LATE(fn)                                                               \
-    if (++c->ncalls > LATE_AFTER && c->d.state == ContinuousTimeMode) {        \
+    if (++c->ncalls > LATE_AFTER && c->d.state == ContinuousTimeMode && LATE_IN(fn)) { \
         double *volatile gone = NULL;   /* a work buffer released too early */ \
         c->d.t = *gone;                                                        \
     }
 #elif defined(DEFECT_LATE_ERROR)
 #define LATE(fn)                                                               \
-    if (++c->ncalls > LATE_AFTER && c->d.state == ContinuousTimeMode)          \
+    if (++c->ncalls > LATE_AFTER && c->d.state == ContinuousTimeMode && LATE_IN(fn)) \
         FAIL("%s: work buffer exhausted after %lu calls", fn, LATE_AFTER)
 #else
 #define LATE(fn)
@@ -721,6 +730,9 @@ static fmi3Status update(Instance *c) {
 #endif
 #endif
     }
+#if defined(DEFECT_SHARED) && DEFECT_SHARED == SHARED_VALUES
+    shared_read_values(c);   /* what every reader of the results then returns */
+#endif
     return fmi3OK;
 }
 
@@ -1368,9 +1380,6 @@ fmi3Status fmi3GetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], 
 #endif
     }
     if (computed && (status = update(c)) != fmi3OK) return status;
-#if defined(DEFECT_SHARED) && DEFECT_SHARED == SHARED_VALUES
-    if (computed) shared_read_values(c);
-#endif
     for (k = 0; k < nvr; k++) {
         int kind = lookup(c, vr[k], &idx);
         values[k] = *slot(c, kind, idx);
@@ -1615,9 +1624,6 @@ fmi3Status fmi3GetContinuousStateDerivatives(fmi3Instance instance, fmi3Float64 
     if (!c->d.dae) FAIL("fmi3GetContinuousStateDerivatives: not available in ODE mode");
 #endif
     if ((status = update(c)) != fmi3OK) return status;
-#if defined(DEFECT_SHARED) && DEFECT_SHARED == SHARED_VALUES
-    shared_read_values(c);
-#endif
     memcpy(der, c->der, nx * sizeof(double));
     return fmi3OK;
 }

@@ -17,6 +17,10 @@ C global is shared. At the same points (P, the start point, and Q, a near point)
 * a later DAE-mode instance at Q: the same;
 * the process's ODE-mode instance and a later one at P: values, inputs and the switch (false).
 
+An instance alone that does not repeat its own values at P after Q (a history the FMU keeps,
+``evaluation-not-repeatable``'s finding) gives no reference: the survey then says so and finds
+nothing.
+
 The survey is memoised in ``ctx.facts`` and is not a family: it registers no probe. The probe
 stage calls it when a rule that DAE762 may explain found something (the first-cause mechanism,
 ``conformance.probes.stage``), and DAE762 reports it (``conformance.probes.endurance``).
@@ -108,6 +112,12 @@ def _survey(ctx: ProbeContext, *, copies: int, rtol: float, atol: float) -> Shar
     try:
         alone = _started(twin, "dae", made)
         ref_p, ref_q = alone.evaluate(p, vals), alone.evaluate(q, vals)
+        again = _Compare(layout, rtol, atol)
+        again.values("DAE", "alone", p.label, vals, ref_p, alone.evaluate(p, vals))
+        if again.found:   # no reference to compare with: the history matters, not the others
+            return Shared(reason=f"an instance alone does not repeat its own values at "
+                                 f"{p.label} after {q.label}: evaluation-not-repeatable's "
+                                 "finding, not one about instances")
         d_p, d_q = _directional(alone, p, layout), _directional(alone, q, layout)
         switch = _switch(alone, layout)
         first_name = "the process's first instance"

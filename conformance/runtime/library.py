@@ -10,12 +10,14 @@ Every FMI call made through a :class:`Library` goes through one choke point, ``_
   lsdae's own work, for the benchmarks and ``lsdae check -v``);
 * turns fmi3Discard, fmi3Error and fmi3Fatal into :class:`~conformance.runtime.errors.FmiError`
   carrying the messages the FMU logged during that call;
-* watches what the calls do to the worker's address space, once it has grown by
-  ``WATCH_FROM`` since the library was loaded (read every ``WATCH_EVERY`` calls, from
-  /proc/self/statm on Linux): from then on each call's growth is added up in the
-  CallRecord, with the call that grew it last, so that a worker that runs out of memory
-  between two FMI calls after the FMU took the memory is the binary's
-  ``binary-memory-limit``, not lsdae's own limit (``conformance.probes.deaths``).
+* watches what the calls do to the worker's address space (read from /proc/self/statm on
+  Linux before and after one call in ``WATCH_EVERY``, and after every call once those
+  sampled calls grew it by an estimated ``WATCH_FROM``): each watched call's growth is added
+  up in the CallRecord, with the call that grew it last, so that a worker that runs out of
+  memory between two FMI calls after the FMU took the memory is the binary's
+  ``binary-memory-limit``, not lsdae's own limit (``conformance.probes.deaths``). Growth
+  between calls (lsdae's own imports and arrays) is never counted and never makes every call
+  watched.
 
 fmpy is imported lazily (it is heavy, and the worker sets its memory limit first).
 """
@@ -36,8 +38,8 @@ from .layout import Layout
 STATUS_NAMES = {0: "fmi3OK", 1: "fmi3Warning", 2: "fmi3Discard", 3: "fmi3Error", 4: "fmi3Fatal"}
 MAX_LOG_MESSAGES = 200          # per call; an FMU that floods its logger is cut off here
 MAX_MESSAGE_CHARS = 1000
-WATCH_FROM = 128 << 20          # address-space growth after which every call is watched
-WATCH_EVERY = 32                # calls between two reads of the address space until then
+WATCH_FROM = 128 << 20          # estimated growth inside calls after which every call is watched
+WATCH_EVERY = 32                # one call in WATCH_EVERY is measured until then
 _PAGE = os.sysconf("SC_PAGE_SIZE") if hasattr(os, "sysconf") else 4096
 
 
@@ -68,7 +70,6 @@ def _recording_class() -> Any:
             lsdae_log: list[str]
             lsdae_blocked: frozenset[str] = frozenset()
             lsdae_fatal = False
-            lsdae_base: int | None = None   # the address space when loaded
             lsdae_watch = False             # every call's growth is added up
             lsdae_grown = 0
 
@@ -90,6 +91,10 @@ def _recording_class() -> Any:
                     if after is not None and after > before:
                         self.lsdae_grown += after - before
                         self.lsdae_record.grew(fname, self.lsdae_grown)
+                        # a sampled call stands for WATCH_EVERY: watch every call once the
+                        # calls' estimated growth passed WATCH_FROM
+                        self.lsdae_watch = (self.lsdae_watch or
+                                            self.lsdae_grown * WATCH_EVERY > WATCH_FROM)
                 if function.restype is ctypes.c_int and result not in (0, 1):
                     self.lsdae_fatal = self.lsdae_fatal or result == 4
                     status = STATUS_NAMES.get(result, f"the illegal status {result}")
@@ -97,15 +102,12 @@ def _recording_class() -> Any:
                 return result
 
             def _lsdae_before(self) -> int | None:
-                """The address space before this call when calls are watched (else None);
-                every WATCH_EVERY calls, whether they must be watched from now on."""
-                if self.lsdae_watch:
+                """The address space before this call when every call is watched, or when
+                this one is sampled (one in WATCH_EVERY); else None. Only what grows inside
+                the calls counts: lsdae's own growth between them (its imports, its arrays)
+                never makes every call watched, which would slow every call down."""
+                if self.lsdae_watch or self.lsdae_calls % WATCH_EVERY == 0:
                     return address_space()
-                if self.lsdae_base is not None and self.lsdae_calls % WATCH_EVERY == 0:
-                    size = address_space()
-                    if size is not None and size - self.lsdae_base > WATCH_FROM:
-                        self.lsdae_watch = True
-                        return size
                 return None
 
         _RECORDING_CLASS = RecordingFMU3Model
@@ -151,7 +153,6 @@ class Library:
         fmu.lsdae_record = self.record
         fmu.lsdae_log = self.log
         fmu.lsdae_blocked = frozenset(self.blocked)
-        fmu.lsdae_base = address_space()
         return fmu
 
     def _copy(self) -> str:

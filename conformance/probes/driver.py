@@ -148,6 +148,10 @@ class Driver:
                     if kind == "start":
                         current = str(event.get("code", ""))
                         step_deadline = time.monotonic() + self.limits.probe_seconds
+                    elif kind == "partial":   # kept if the worker dies before "done"
+                        self.run.outcome.violations.extend(
+                            (str(event.get("code")), violation_from_json(v))
+                            for v in event.get("violations") or [])
                     elif kind == "done":
                         self._stats(str(event.get("code", "")), event.get("stats"))
                         self._done(event)
@@ -204,6 +208,8 @@ class Driver:
         code = str(event.get("code"))
         outcome = self.run.outcome
         violations = [violation_from_json(v) for v in event.get("violations") or []]
+        if event.get("replaces"):   # what "partial" sent is superseded by this event
+            outcome.violations = [(c, v) for c, v in outcome.violations if c != code]
         outcome.violations.extend((code, v) for v in violations)
         consequences = [violation_from_json(v) for v in event.get("consequences") or []]
         outcome.consequences.extend((code, v) for v in consequences)

@@ -8,8 +8,10 @@ the points, and runs each probe in turn, sending one JSON event per step:
     {"event": "ready", "info": {...}}             setup done (points, seed)
     {"event": "load-failed", "violation": {...}}  the binary cannot be loaded
     {"event": "start", "code": "DAE7xx"}
+    {"event": "partial", "code": ..., "violations": [...]}   a probe's findings, sent before
+                                                  the first-cause re-check (kept if it dies)
     {"event": "done", "code": ..., "violations": [...], "skipped": reason|null, "info": {...},
-     "consequences": [...],
+     "consequences": [...], "replaces": bool (the violations of "partial" are superseded),
      "stats": {"seconds": s, "calls": n, "fmi_seconds": s, "peak_rss": bytes}}
     {"event": "memory", "code": ...}              Python itself ran out of memory
     {"event": "fatal", "code": ...}               a call returned fmi3Fatal: this process stops,
@@ -171,21 +173,28 @@ class _Stage:
                 evidence=evidence(rule=code, traceback=traceback.format_exc(limit=8)),
                 rule="internal-error"))
         consequences: list[Any] = []
-        if violations and skipped is None and not library.fatal:
+        replaces = bool(violations and skipped is None and not library.fatal
+                        and self._explained(code))
+        if replaces:   # sent first: a death in the survey or the re-run must not lose them
+            self.send({"event": "partial", "code": code,
+                       "violations": [violation_json(v) for v in violations]})
             violations, consequences = self._first_cause(ctx, code, options, violations)
-        self.send({"event": "done", "code": code,
+        self.send({"event": "done", "code": code, "replaces": replaces,
                    "violations": [violation_json(v) for v in violations],
                    "consequences": [violation_json(v) for v in consequences],
                    "skipped": skipped, "info": self._info(ctx.facts.get("info", {})),
                    "stats": _stats(started, library.calls - calls, library.seconds - inside)})
 
+    def _explained(self, code: str) -> bool:
+        """DAE762 is planned and its ``explains`` option lists ``code``."""
+        cause = self.first_cause
+        return cause is not None and code in str(cause["explains"]).split()
+
     def _first_cause(self, ctx: ProbeContext, code: str, options: dict[str, Any],
                      violations: list[Any]) -> tuple[list[Any], list[Any]]:
         """(own violations, consequences): the violations of ``code`` are consequences of
         instances that are not independent when they vanish with every instance alone."""
-        cause = self.first_cause
-        if cause is None or code not in str(cause["explains"]).split():
-            return violations, []
+        cause: Any = self.first_cause
         try:
             if not survey(ctx, copies=cause["alone_copies"], rtol=cause["rtol"],
                           atol=cause["atol"]).found:

@@ -57,7 +57,7 @@ class Driver:
         self.call_file = os.path.join(tmp, "call")
         self.stderr_file = os.path.join(tmp, "worker.log")
         self.fmu_deadline = time.monotonic() + self.limits.fmu_seconds
-        self.blocked: list[str] = []   # FMI functions that hung: not called again
+        self.blocked: list[str] = []   # FMI functions that hung or returned fmi3Fatal
         self.died: list[str] = []      # probes during which a worker died or was killed
         self.diagnosis = Diagnosis(self)
 
@@ -177,7 +177,9 @@ class Driver:
                             evidence=evidence(traceback=str(event.get("traceback", "")))))
                         watch.finish()
                         return _Death("worker-error", "setup")
-                    elif kind == "fatal":
+                    elif kind == "fatal":   # every instance is gone: that call is not made again
+                        if event.get("call") and event["call"] not in self.blocked:
+                            self.blocked.append(str(event["call"]))
                         watch.finish()
                         return _Death("fatal", str(event.get("code", "")))
                     elif kind == "end":

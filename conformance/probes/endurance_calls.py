@@ -89,6 +89,8 @@ class StepCalls:
                     self.calls.append(name)
                 except FmiError as exc:
                     self.left_out[name] = f"{exc.call} returned {exc.status} at {point.label}"
+                except ProbeSkipped as exc:   # not called again (it hung or was fatal before)
+                    self.left_out[name] = str(exc)
         except (FmiError, ProbeSkipped) as exc:
             raise ProbeSkipped(f"the importer's calls could not be tried at {point.label} on "
                                f"a fresh instance: {exc}") from None

@@ -185,7 +185,7 @@ def _directional(inst: Any, point: Point | None, layout: Layout) -> np.ndarray |
                               dtype=float)
         return np.asarray(inst.directional(point, unknowns_of(layout), knowns, seed),
                           dtype=float)
-    except FmiError:
+    except (FmiError, ProbeSkipped):   # refused, or not called again (it hung or was fatal)
         return None
 
 

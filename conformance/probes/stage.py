@@ -14,8 +14,9 @@ the points, and runs each probe in turn, sending one JSON event per step:
      "consequences": [...], "replaces": bool (the violations of "partial" are superseded),
      "stats": {"seconds": s, "calls": n, "fmi_seconds": s, "peak_rss": bytes}}
     {"event": "memory", "code": ...}              Python itself ran out of memory
-    {"event": "fatal", "code": ...}               a call returned fmi3Fatal: this process stops,
-                                                  a fresh one runs the remaining probes
+    {"event": "fatal", "code": ..., "call": ...}  a call returned fmi3Fatal: this process stops,
+                                                  a fresh one runs the remaining probes and
+                                                  never makes that call again
     {"event": "end"}
 
 The runner (``conformance.probes.runner``) reads them and decides what a death means. ``stats``
@@ -96,7 +97,7 @@ class _Stage:
             renew_failed(ctx)  # a probe never inherits an instance another one terminated
             self._probe(ctx, record, code, name, options)
             if library.fatal:  # every instance is invalid now (SM-04): start afresh
-                self.send({"event": "fatal", "code": code})
+                self.send({"event": "fatal", "code": code, "call": library.fatal_call})
                 return 0
         record.set_probe("teardown")
         library.free_all()

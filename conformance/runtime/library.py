@@ -70,14 +70,15 @@ def _recording_class() -> Any:
             lsdae_log: list[str]
             lsdae_blocked: frozenset[str] = frozenset()
             lsdae_fatal = False
+            lsdae_fatal_call = ""           # the first call that returned fmi3Fatal
             lsdae_watch = False             # every call's growth is added up
             lsdae_grown = 0
 
             def _call(self, fname: str, *args: Any) -> Any:
                 function = self._functions[fname]
                 if fname in self.lsdae_blocked:  # not an FmiError: nobody must report it as one
-                    raise Unavailable(f"{fname} is not called again: it did not return in an "
-                                       "earlier probe (binary-timed-out)")
+                    raise Unavailable(f"{fname} is not called again: in an earlier worker it "
+                                      "did not return (binary-timed-out) or returned fmi3Fatal")
                 del self.lsdae_log[:]  # the log holds the messages of the last call only
                 before = self._lsdae_before()
                 self.lsdae_record.enter(fname, self.lsdae_calls + 1)
@@ -97,6 +98,8 @@ def _recording_class() -> Any:
                                             self.lsdae_grown * WATCH_EVERY > WATCH_FROM)
                 if function.restype is ctypes.c_int and result not in (0, 1):
                     self.lsdae_fatal = self.lsdae_fatal or result == 4
+                    if result == 4 and not self.lsdae_fatal_call:
+                        self.lsdae_fatal_call = fname
                     status = STATUS_NAMES.get(result, f"the illegal status {result}")
                     raise FmiError(fname, status, self.lsdae_log)
                 return result
@@ -197,6 +200,11 @@ class Library:
     def seconds(self) -> float:
         """Seconds spent inside the binary's functions so far (not in lsdae's code)."""
         return float(self.fmu.lsdae_seconds)
+
+    @property
+    def fatal_call(self) -> str:
+        """The first FMI call that returned fmi3Fatal ("" when none did)."""
+        return str(self.fmu.lsdae_fatal_call)
 
     @property
     def fatal(self) -> bool:

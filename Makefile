@@ -34,8 +34,11 @@ demo: $(STAMP)
 	@echo "reports written to reports/demo/"
 
 # The whole suite. pytest exits non-zero (5) when no test is collected; that fails too.
+# The whole suite, on TEST_JOBS processes (pytest-xdist; CI has 2 cores; TEST_JOBS=0 runs it in
+# this process).
+TEST_JOBS ?= 2
 test: $(STAMP)
-	$(BIN)/python -m pytest -q -p no:cacheprovider
+	$(BIN)/python -m pytest -q -p no:cacheprovider -n $(TEST_JOBS)
 
 # The mutation test of the engine with 20 times its examples and a random seed (minutes).
 fuzz: $(STAMP)

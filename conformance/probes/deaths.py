@@ -12,6 +12,10 @@ in progress; the driver's :class:`CallClock` says how long that call had been ru
   loaded machine must not make one).
 * A memory limit reached during a call is the binary's; a crash always is (the binary may have
   corrupted memory earlier), except before it was loaded at all (``internal-error``).
+* A memory limit reached while no FMI call was in progress is the binary's all the same when
+  FMI calls had grown the address space by at least ``FMU_SHARE`` of the limit (the
+  CallRecord counts it once the library watches its calls): the FMU took the memory, and
+  lsdae's next allocation only found it gone. The finding names the call that grew it last.
 
 For lsdae's own limits the reason is returned (the driver lists the probe as not run with
 it); the binary's findings are emitted here, naming the probe and the call.
@@ -32,6 +36,7 @@ CRASHED, TIMED_OUT, MEMORY, NOT_LOADABLE = (
     "binary-crashed", "binary-timed-out", "binary-memory-limit", "binary-not-loadable")
 MEMORY_FRACTION = 0.8        # a death at this share of the address-space limit is "memory"
 HANG_SHARE = 0.5             # a call running this share of its probe's time is a hang
+FMU_SHARE = 0.5              # FMI calls that grew the address space by this share: the FMU's
 STDERR_TAIL = 1500
 
 log = logging.getLogger(__name__)
@@ -79,6 +84,14 @@ class Diagnosis:
                 return CallRecord.parse(fh.read(CallRecord.SIZE))
         except OSError:
             return "", "", False
+
+    def _growth(self) -> tuple[int, str]:
+        """(bytes by which FMI calls grew the worker's address space, the call last)."""
+        try:
+            with open(self.driver.call_file, "rb") as fh:
+                return CallRecord.growth(fh.read(CallRecord.SIZE))
+        except OSError:
+            return 0, ""
 
     def stderr(self) -> str:
         path, tmp = self.driver.stderr_file, self.driver.tmp
@@ -164,6 +177,19 @@ class Diagnosis:
         how = watch.how()
         limit_mib = int(self.limits.address_space_mib)
         memory = watch.memory_error or watch.peak() >= MEMORY_FRACTION * (limit_mib << 20)
+        grown, grew = self._growth()
+        if memory and grown >= FMU_SHARE * (limit_mib << 20) and not facts["call_in_progress"]:
+            if self.is_rule(probe):
+                self.run.outcome.run.add(probe)
+            self.run.emit(MEMORY, Violation(
+                f"the binary's FMI calls grew the worker's address space by "
+                f"{grown / (1 << 20):,.0f} MiB (the last of them {grew}) until the "
+                f"{limit_mib} MiB address-space limit was exhausted {where}, in "
+                f"{self.run.names(probe)} ({how})", Location(file=self.run.binary),
+                evidence(facts, exit=how, grown_in_fmi_calls_mib=round(grown / (1 << 20)),
+                         last_growing_call=grew, limit_mib=limit_mib,
+                         **self._stderr_evidence()), subject=grew))
+            return probe, ""
         if memory and not (call and facts["call_in_progress"]):  # ours: the binary was idle
             return probe, self._own(
                 probe, f"memory limit: lsdae's own computation in {self.run.names(probe)} "

@@ -57,7 +57,7 @@ class Driver:
         self.call_file = os.path.join(tmp, "call")
         self.stderr_file = os.path.join(tmp, "worker.log")
         self.fmu_deadline = time.monotonic() + self.limits.fmu_seconds
-        self.blocked: list[str] = []   # FMI functions that hung: not called again
+        self.blocked: list[str] = []   # FMI functions that hung or returned fmi3Fatal
         self.died: list[str] = []      # probes during which a worker died or was killed
         self.diagnosis = Diagnosis(self)
 
@@ -148,6 +148,10 @@ class Driver:
                     if kind == "start":
                         current = str(event.get("code", ""))
                         step_deadline = time.monotonic() + self.limits.probe_seconds
+                    elif kind == "partial":   # kept if the worker dies before "done"
+                        self.run.outcome.violations.extend(
+                            (str(event.get("code")), violation_from_json(v))
+                            for v in event.get("violations") or [])
                     elif kind == "done":
                         self._stats(str(event.get("code", "")), event.get("stats"))
                         self._done(event)
@@ -173,7 +177,9 @@ class Driver:
                             evidence=evidence(traceback=str(event.get("traceback", "")))))
                         watch.finish()
                         return _Death("worker-error", "setup")
-                    elif kind == "fatal":
+                    elif kind == "fatal":   # every instance is gone: that call is not made again
+                        if event.get("call") and event["call"] not in self.blocked:
+                            self.blocked.append(str(event["call"]))
                         watch.finish()
                         return _Death("fatal", str(event.get("code", "")))
                     elif kind == "end":
@@ -204,7 +210,12 @@ class Driver:
         code = str(event.get("code"))
         outcome = self.run.outcome
         violations = [violation_from_json(v) for v in event.get("violations") or []]
+        if event.get("replaces"):   # what "partial" sent is superseded by this event
+            outcome.violations = [(c, v) for c, v in outcome.violations if c != code]
         outcome.violations.extend((code, v) for v in violations)
+        consequences = [violation_from_json(v) for v in event.get("consequences") or []]
+        outcome.consequences.extend((code, v) for v in consequences)
+        violations += consequences   # the rule ran and found something (whoever reports it)
         skipped = event.get("skipped")
         if skipped and not violations:
             outcome.skipped.add((code, str(skipped)))

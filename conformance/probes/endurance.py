@@ -31,6 +31,7 @@ from ..runtime.layout import Layout
 from .api import Point, ProbeContext, ProbeSkipped
 from .common import dae_of, layout_of, root_location, unknowns_of
 from .endurance_run import level_of, path_run, remember_settings
+from .independence import shared_violation, survey
 
 RUN_CODES = ("DAE760", "DAE761")    # the probes that judge the path run
 # the scenarios of instances-not-independent, in the order they are tried
@@ -92,6 +93,9 @@ def memory_grows(ctx: ProbeContext, *, bytes_per_call_quick: float, bytes_per_ca
         raise ProbeSkipped(run.memory_note)
     if run.out_of_time():
         raise ProbeSkipped(run.out_of_time())
+    if run.stopped == "memory":
+        yield _stopped_for_memory(ctx, run, bytes_per_call, min_growth_kib)
+        return
     found = growth([c for c, _ in run.samples], [r for _, r in run.samples])
     if found is None:
         raise ProbeSkipped(f"the path run ended after {run.calls:,} FMI calls ({run.stopped}): "
@@ -112,6 +116,28 @@ def memory_grows(ctx: ProbeContext, *, bytes_per_call_quick: float, bytes_per_ca
                  sample_unit="[FMI calls, KiB grown since the first sample]",
                  method="least squares over the second half of the samples; each of its "
                         "quarters must show the rate too"))
+
+
+def _stopped_for_memory(ctx: ProbeContext, run: Any, bytes_per_call: float,
+                        min_growth_kib: float) -> Violation:
+    """The path run stopped because memory grew by ``max_growth_mib``: the growth measured up
+    to the stop is the finding, however few the samples (a fast leak takes few calls)."""
+    (first_calls, first_rss), (calls, rss) = run.samples[0], run.samples[-1]
+    grown = rss - first_rss
+    per_call = grown / max(1, calls - first_calls)
+    return Violation(
+        f"the worker's resident memory grew by {grown / (1 << 20):,.1f} MiB in "
+        f"{calls - first_calls:,} FMI calls on one instance along the path (about "
+        f"{per_call:,.0f} bytes per call), and the path run was stopped there, at "
+        f"max_growth_mib = {run.settings.max_growth_mib:g} MiB: the FMU allocates without "
+        "freeing", root_location(ctx),
+        evidence(bytes_per_call=round(per_call), growth_kib=round(grown / KIB),
+                 threshold_bytes_per_call=bytes_per_call, min_growth_kib=min_growth_kib,
+                 max_growth_mib=run.settings.max_growth_mib, calls=run.calls,
+                 stopped=run.stopped, level=run.settings.level,
+                 samples=_growth_samples(run.samples),
+                 sample_unit="[FMI calls, KiB grown since the first sample]",
+                 method="growth from the first sample to the stop, over the calls between"))
 
 
 def _growth_samples(samples: Sequence[tuple[int, int]]) -> list[list[int]]:
@@ -172,19 +198,31 @@ class _Scenarios:
 
 def instances_not_independent(ctx: ProbeContext, *, cycles_quick: int, cycles_long: int,
                               seconds_quick: float, seconds_long: float, rtol: float,
-                              atol: float) -> Iterator[Violation]:
+                              atol: float, alone_copies: int,
+                              explains: Sequence[str]) -> Iterator[Violation]:
     """Instances of one FMU do not share state: a second instance beside the first, the two
     set to different points in turn, and ``cycles_<level>`` instantiate/free cycles give the
     values of the first instance at the same point (after initialisation, and at two sampled
     points), within ``atol + rtol * nominal``. ``seconds_<level>`` is a safety net: when it
     ends the cycles before a difference is found, the probe is not run (time budget). An
     instance that cannot repeat its own values (P, Q, P) is ``evaluation-not-repeatable``'s
-    finding: the probe is skipped then."""
+    finding: the probe is skipped then.
+
+    First of all, the survey of :mod:`.independence` (the process's first instance, a later
+    one and the ODE-mode ones against instances alone, each in a copy of the binary of its
+    own, ``alone_copies`` at most): a difference there is the finding. ``explains`` names the
+    rules whose findings the probe stage re-runs with every instance alone; what vanishes is
+    folded into this finding (``runner.fold_consequences``)."""
     level = level_of(ctx)
     me = ctx.model.model_exchange
     if me is not None and me.flag("canBeInstantiatedOnlyOncePerProcess"):
         raise ProbeSkipped("the FMU declares canBeInstantiatedOnlyOncePerProcess: its instances "
                            "may share state")
+    shared = survey(ctx, copies=alone_copies, rtol=rtol, atol=atol)
+    if shared.found:
+        yield shared_violation(ctx, shared, root_location(ctx), level=level, rtol=rtol,
+                               atol=atol, scale="nominal or magnitude of each value")
+        return
     cycles = int(cycles_quick if level == "quick" else cycles_long)
     seconds = float(seconds_quick if level == "quick" else seconds_long)
     dae_of(ctx)

@@ -5,10 +5,16 @@ the sampled points (the start point, then each near point, back to the start;
 ``SEGMENT_STEPS`` evaluations on each segment, every known interpolated linearly), lap after
 lap, until the budget of its level is spent: at every step it sets t, x, w and u
 (fmi3SetTime, fmi3SetContinuousStates, fmi3SetFloat64) and reads the residuals and outputs
-(fmi3GetFloat64) and the derivatives (fmi3GetContinuousStateDerivatives). Along the way it
-samples the worker's resident memory (VmRSS, Linux). The first call that fails ends the run;
-the same path point is then tried on a fresh instance, which tells a failure that comes with
-use from one that belongs to the point.
+(fmi3GetFloat64) and the derivatives (fmi3GetContinuousStateDerivatives), and then makes every
+other call an importer makes (:mod:`.endurance_calls`: event indicators, the state vector and
+its nominals, directional and adjoint derivatives; and one instance instantiated and freed per
+lap). Along the way it samples the worker's resident memory (VmRSS, Linux): every
+``budget / samples`` calls, and besides whenever the peak resident size grew by a share of
+``max_growth_mib`` since the last sample, so that a fast leak is sampled densely up to the stop.
+The first call that fails ends the run; the same path point is then tried on a fresh instance,
+which tells a failure that comes with use from one that belongs to the point. A run stopped
+because memory grew by ``max_growth_mib`` ends as "memory": that growth is itself
+``memory-grows``'s finding.
 
 The budget is counted, never timed, so that the run, and every verdict on it, is the same on
 every machine: ``calls_<level>`` FMI calls, and ``values_<level>`` values set and read (the
@@ -38,6 +44,12 @@ from ..runtime.instance import Instance
 from ..runtime.layout import Layout
 from .api import FmiError, Point, ProbeContext, ProbeSkipped
 from .common import dae_of, error_evidence, layout_of
+from .endurance_calls import StepCalls
+
+try:
+    import resource
+except ImportError:  # pragma: no cover - not POSIX: samples at the call interval only
+    resource = None  # type: ignore[assignment]
 
 SETTINGS_RULE = "evaluation-fails-late"
 FACT = "endurance.path"
@@ -77,13 +89,14 @@ class PathRun:
     samples: list[tuple[int, int]] = field(default_factory=list)  # (calls so far, VmRSS bytes)
     memory_note: str = ""           # why there are no memory samples
     budget_calls: int = 0           # the FMI calls the budget allows this model (see _Walk)
+    calls_made: dict[str, Any] = field(default_factory=dict)   # StepCalls.info()
 
     def info(self) -> dict[str, Any]:
         """The summary for the report's ``info["endurance"]`` (no memory figures: they differ
         from run to run)."""
         return {"level": self.settings.level, "path_calls": self.calls,
                 "path_steps": self.steps, "laps": self.laps, "stopped": self.stopped,
-                "budget_calls": self.budget_calls}
+                "budget_calls": self.budget_calls, **self.calls_made}
 
     def out_of_time(self) -> str:
         """Why no rule judges a run the safety net stopped ("" when it did not)."""
@@ -157,6 +170,13 @@ def lap_points(points: Sequence[Point], steps: int = SEGMENT_STEPS) -> list[Poin
     return out or [points[0]]
 
 
+def _peak_bytes() -> float:
+    """The peak resident size so far (getrusage: cheap enough for every step), 0 unknown."""
+    if resource is None:
+        return 0.0
+    return float(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss) * 1024.0   # KiB (Linux)
+
+
 def resident_bytes() -> int | None:
     """The worker's resident set (VmRSS), or None where /proc/self/status has none."""
     if not sys.platform.startswith("linux"):
@@ -172,15 +192,17 @@ class _Walk:
         self.run = PathRun(settings)
         self.watch = tuple(dict.fromkeys([*self.layout.residuals, *self.layout.outputs]))
         self.nx = len(self.layout.states)
-        self.run.budget_calls = self._budget_calls()
+        self.extra = StepCalls(self.layout)
+        self.first = 0
 
     def _budget_calls(self) -> int:
         """The FMI calls the budget allows: ``calls``, or fewer when the steps' arrays are so
         long that ``values`` runs out first (a count from the layout, not a clock)."""
         layout, nx = self.layout, self.nx
         knowns = len(layout.algebraic) + len(layout.inputs)
-        calls_per_step = 1 + 2 * (nx > 0) + (knowns > 0) + (len(self.watch) > 0)
-        values_per_step = max(1, 2 * nx + knowns + len(self.watch))
+        calls_per_step = (1 + 2 * (nx > 0) + (knowns > 0) + (len(self.watch) > 0)
+                          + len(self.extra.calls))
+        values_per_step = max(1, 2 * nx + knowns + len(self.watch) + self.extra.values())
         steps = max(1, self.settings.values // values_per_step)
         return min(self.settings.calls, steps * calls_per_step)
 
@@ -189,10 +211,17 @@ class _Walk:
         inst.get_float64(self.watch)
         if self.nx:
             inst.get_derivatives(self.nx)
+        self.extra.run(inst)
+
+    def _new(self) -> Instance:
+        return self.ctx.new_instance("dae")  # type: ignore[return-value]
 
     def walk(self) -> PathRun:
         lap = lap_points(self.ctx.points)
-        inst: Instance = self.ctx.new_instance("dae")  # type: ignore[assignment]
+        self.extra.prepare(self._new, lap[0])
+        self.run.calls_made = self.extra.info()
+        self.run.budget_calls = self._budget_calls()
+        inst = self._new()
         try:
             self._loop(inst, lap)
         finally:
@@ -201,25 +230,31 @@ class _Walk:
 
     def _loop(self, inst: Instance, lap: list[Point]) -> None:
         run, settings = self.run, self.settings
-        first = self.library.calls
+        first = self.first = self.library.calls
         deadline = time.monotonic() + settings.seconds
         budget = run.budget_calls
         interval = max(1, budget // max(1, settings.samples))
         next_sample = 0
         limit = settings.max_growth_mib * (1 << 20)
+        jump = limit / max(1, settings.samples)   # peak growth that takes a sample at once
+        peak_at_sample = 0.0
         if resident_bytes() is None:
             run.memory_note = "resident memory is read from /proc/self/status (Linux only)"
         while not run.stopped:
             for k, point in enumerate(lap):
                 run.calls = self.library.calls - first
-                if run.calls >= next_sample and not run.memory_note:
+                peak = _peak_bytes() if not run.memory_note else 0.0
+                if not run.memory_note and (run.calls >= next_sample
+                                            or peak - peak_at_sample > jump):
                     rss = resident_bytes()
                     if rss is not None:
                         run.samples.append((run.calls, rss))
+                        peak_at_sample = peak
                         if rss - run.samples[0][1] > limit:
                             run.stopped = "memory"
                             break
-                    next_sample += interval
+                    if run.calls >= next_sample:
+                        next_sample += interval
                 if run.calls >= budget:
                     run.stopped = "budget"
                     break
@@ -236,6 +271,16 @@ class _Walk:
                 run.steps += 1
             else:
                 run.laps += 1
+                self._cycle(inst, lap[0])
+
+    def _cycle(self, inst: Instance, point: Point) -> None:
+        """One instance instantiated, initialised and freed, as importers do between runs."""
+        try:
+            self._new().free()
+        except FmiError as exc:
+            self.run.calls = self.library.calls - self.first
+            self.run.stopped = "failure"
+            self.run.failure = self._failure(inst, exc, point, 0)
 
     def _failure(self, inst: Instance, exc: FmiError, point: Point, index: int
                  ) -> dict[str, Any]:

@@ -47,6 +47,11 @@ FIRST: frozenset[str] = frozenset(FAMILIES["start_values"])
 #: so that an FMU that crashes on one has already been probed for everything else.
 LAST: frozenset[str] = frozenset(FAMILIES["rare_calls"])
 
+#: The first cause (instances-not-independent): the findings of the rules its ``explains``
+#: option lists are its consequences when they vanish with every instance alone
+#: (``conformance.probes.stage``, ``runner.fold_consequences``).
+FIRST_CAUSE = "DAE762"
+
 
 class _Probes(Mapping[str, "Probe"]):
     """The probe functions by code, each family module imported on first use."""

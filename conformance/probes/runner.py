@@ -41,11 +41,11 @@ from pathlib import Path
 from typing import Any, Iterable, Sequence
 
 from ..report.catalogue import RuleSpec, default_catalogue
-from ..report.findings import Violation
+from ..report.findings import Violation, evidence
 from ..model.layer import describe_fmu
 from ..runtime.host import host_platform_tuple, library_extension
 from .driver import RUNNER_RULES, Driver
-from .registry import ENDURANCE, FAMILY_OF, FIRST, LAST
+from .registry import ENDURANCE, FAMILY_OF, FIRST, FIRST_CAUSE, LAST
 
 log = logging.getLogger(__name__)
 
@@ -78,6 +78,9 @@ class ProbeOutcome:
     skipped: set[tuple[str, str]] = field(default_factory=set)
     not_run: set[tuple[str, str]] = field(default_factory=set)   # the failed part of skipped
     info: dict[str, Any] = field(default_factory=dict)
+    # violations that vanish with every instance alone (stage._first_cause): folded into
+    # instances-not-independent's finding by fold_consequences
+    consequences: list[tuple[str, Violation]] = field(default_factory=list)
     # what each step of the workers cost: {"probe", "seconds", "calls", "fmi_seconds",
     # "peak_rss"}; logged,
     # never part of the report (it differs from run to run)
@@ -182,6 +185,7 @@ class _Run:
                 Driver(self, tmp, probes).drive()
         finally:
             shutil.rmtree(tmp, ignore_errors=True)
+        fold_consequences(self.outcome)
         return self.outcome
 
     def _extract(self, tmp: str) -> bool:
@@ -199,3 +203,31 @@ class _Run:
         return True
 
 
+
+
+def fold_consequences(outcome: ProbeOutcome) -> None:
+    """The first cause: the findings that vanished with every instance alone are folded into
+    the finding of instances-not-independent (its evidence lists them, its message counts
+    them); when that rule reported nothing (not run, not selected, a death), nothing explains
+    them and they are reported as the findings of their own rules."""
+    if not outcome.consequences:
+        return
+    at = next((k for k, (code, _) in enumerate(outcome.violations) if code == FIRST_CAUSE),
+              None)
+    if at is None:
+        outcome.violations.extend(outcome.consequences)
+        outcome.consequences.clear()
+        return
+    code, cause = outcome.violations[at]
+    listed: dict[str, list[str]] = {}
+    for rule, v in outcome.consequences:
+        listed.setdefault(rule, []).append(v.subject or "")
+    count = len(outcome.consequences)
+    outcome.violations[at] = (code, replace(
+        cause, message=cause.message + (
+            f"; {count} finding{'s' if count > 1 else ''} of "
+            f"{', '.join(sorted(listed))} vanish with every instance alone (a copy of the "
+            "binary of its own): consequences of this one, listed in its evidence"),
+        evidence=cause.evidence + evidence(consequences=[
+            {"rule": rule, "subject": v.subject, "message": v.message}
+            for rule, v in outcome.consequences])))

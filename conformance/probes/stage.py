@@ -8,17 +8,30 @@ the points, and runs each probe in turn, sending one JSON event per step:
     {"event": "ready", "info": {...}}             setup done (points, seed)
     {"event": "load-failed", "violation": {...}}  the binary cannot be loaded
     {"event": "start", "code": "DAE7xx"}
+    {"event": "partial", "code": ..., "violations": [...]}   a probe's findings, sent before
+                                                  the first-cause re-check (kept if it dies)
     {"event": "done", "code": ..., "violations": [...], "skipped": reason|null, "info": {...},
+     "consequences": [...], "replaces": bool (the violations of "partial" are superseded),
      "stats": {"seconds": s, "calls": n, "fmi_seconds": s, "peak_rss": bytes}}
     {"event": "memory", "code": ...}              Python itself ran out of memory
-    {"event": "fatal", "code": ...}               a call returned fmi3Fatal: this process stops,
-                                                  a fresh one runs the remaining probes
+    {"event": "fatal", "code": ..., "call": ...}  a call returned fmi3Fatal: this process stops,
+                                                  a fresh one runs the remaining probes and
+                                                  never makes that call again
     {"event": "end"}
 
 The runner (``conformance.probes.runner``) reads them and decides what a death means. ``stats``
 (also in "ready", for the setup) is what the step cost: wall seconds, FMI calls and the peak
 resident size of the worker during it; the driver logs them (``lsdae check -v``) and never puts
 them in the report, which stays the same from run to run.
+
+The first cause (``instances-not-independent``, DAE762): when a probe whose code DAE762's
+``explains`` option lists found something and DAE762 is planned, the stage asks
+:func:`.independence.survey` whether the instances of this process are independent. If they are
+not, the probe is run again in a context where every instance is alone (a copy of the binary of
+its own, ``Library.alone``; the points sampled the same way, with the same seed). What vanishes
+there is sent as ``consequences``, not as violations: the runner folds them into DAE762's
+finding, or restores them when DAE762 reported nothing. What the re-run still finds is the
+probe's own finding, measured without the shared state.
 """
 from __future__ import annotations
 
@@ -33,16 +46,17 @@ import numpy as np
 
 from ..report.findings import Location, Violation, evidence
 from ..runtime.callrecord import CallRecord
-from ..runtime.child import memory_info, reset_peak_memory
+from ..runtime.child import memory_info, near_limit, reset_peak_memory
 from ..runtime.layout import Layout
 from ..runtime.library import Library
 from ..runtime.modes import start_initialization, start_instance
 from ..runtime.protocol import MEMORY_EXIT, Job, violation_json
 from .api import PLANNED, FmiError, ProbeContext, ProbeSkipped
 from .common import renew_failed
+from .independence import FIRST, survey
 from .jacobian_layout import MODE_NAMES
 from .job import ProbeJob
-from .registry import PROBES
+from .registry import FIRST_CAUSE, PROBES
 from .sampling import near_points, points_info, start_point
 
 def run_job(job: Job, send: Callable[[dict[str, Any]], None]) -> int:
@@ -56,6 +70,9 @@ class _Stage:
         self.payload: ProbeJob = job.payload
         self.send = send
         self._sent: dict[str, Any] = {}   # the published-once info values already sent
+        self._alone: ProbeContext | None = None   # every instance alone (the first cause)
+        self.first_cause: dict[str, Any] | None = next(
+            (options for code, _, options in self.payload.probes if code == FIRST_CAUSE), None)
 
     def run(self) -> int:
         started = time.perf_counter()
@@ -80,7 +97,7 @@ class _Stage:
             renew_failed(ctx)  # a probe never inherits an instance another one terminated
             self._probe(ctx, record, code, name, options)
             if library.fatal:  # every instance is invalid now (SM-04): start afresh
-                self.send({"event": "fatal", "code": code})
+                self.send({"event": "fatal", "code": code, "call": library.fatal_call})
                 return 0
         record.set_probe("teardown")
         library.free_all()
@@ -115,6 +132,7 @@ class _Stage:
                 facts[f"{mode}_error"] = exc
                 modes[MODE_NAMES[mode]] = f"not probed: {exc}"
         facts["info"]["modes"] = modes
+        facts[FIRST] = evaluators["dae"]   # the process's first instance
         start = start_point(evaluators["dae"] or evaluators["ode"], layout,
                             facts.setdefault("start_nonfinite", {}))
         rng = np.random.default_rng(self.payload.seed)
@@ -147,19 +165,61 @@ class _Stage:
         except FmiError as exc:
             skipped = exc.cause()
         except MemoryError:
-            violations.clear()
-            self.send({"event": "memory", "code": code})
-            sys.stderr.flush()
-            os._exit(MEMORY_EXIT)
+            self._out_of_memory(code)
         except Exception as exc:  # a defect of ours: report it, run the next probe
+            if near_limit():   # an import or allocation failed for want of address space
+                self._out_of_memory(code)
             violations.append(Violation(
                 f"probe {code} {name} failed: {type(exc).__name__}: {exc}",
                 evidence=evidence(rule=code, traceback=traceback.format_exc(limit=8)),
                 rule="internal-error"))
-        self.send({"event": "done", "code": code,
+        consequences: list[Any] = []
+        replaces = bool(violations and skipped is None and not library.fatal
+                        and self._explained(code))
+        if replaces:   # sent first: a death in the survey or the re-run must not lose them
+            self.send({"event": "partial", "code": code,
+                       "violations": [violation_json(v) for v in violations]})
+            violations, consequences = self._first_cause(ctx, code, options, violations)
+        self.send({"event": "done", "code": code, "replaces": replaces,
                    "violations": [violation_json(v) for v in violations],
+                   "consequences": [violation_json(v) for v in consequences],
                    "skipped": skipped, "info": self._info(ctx.facts.get("info", {})),
                    "stats": _stats(started, library.calls - calls, library.seconds - inside)})
+
+    def _explained(self, code: str) -> bool:
+        """DAE762 is planned and its ``explains`` option lists ``code``."""
+        cause = self.first_cause
+        return cause is not None and code in str(cause["explains"]).split()
+
+    def _first_cause(self, ctx: ProbeContext, code: str, options: dict[str, Any],
+                     violations: list[Any]) -> tuple[list[Any], list[Any]]:
+        """(own violations, consequences): the violations of ``code`` are consequences of
+        instances that are not independent when they vanish with every instance alone."""
+        cause: Any = self.first_cause
+        try:
+            if not survey(ctx, copies=cause["alone_copies"], rtol=cause["rtol"],
+                          atol=cause["atol"]).found:
+                return violations, []
+            if self._alone is None:
+                library: Any = ctx.facts["library"]
+                self._alone = self._context(library.alone(cause["alone_copies"]),
+                                            ctx.facts["layout"])  # type: ignore[arg-type]
+            renew_failed(self._alone)
+            again = list(PROBES[code](self._alone, **options))
+        except (FmiError, ProbeSkipped):
+            return violations, []   # no re-run: the findings stand as they are
+        except Exception:  # a defect of ours in the re-run must not hide the findings
+            traceback.print_exc(file=sys.stderr)
+            return violations, []
+        return (again, []) if again else ([], violations)
+
+
+    def _out_of_memory(self, code: str) -> None:
+        """Python ran out of address space in probe ``code``: end this worker as a memory
+        death (the driver decides whose: ``conformance.probes.deaths``)."""
+        self.send({"event": "memory", "code": code})
+        sys.stderr.flush()
+        os._exit(MEMORY_EXIT)
 
 
 # Info values a probe publishes once as a new object and never changes in place: sent again

@@ -30,12 +30,15 @@ class CallRecord:
     (32 bytes), call name (64 bytes), one byte that is 1 while the call is in progress; at 104
     the number of FMI calls the library has started (the call in progress included, written
     before the call), at 112 that number when the probe began (both unsigned 64-bit, little
-    endian).
+    endian); at 120 the bytes by which FMI calls grew the worker's address space (counted once
+    the library watches its calls' memory, see ``conformance.runtime.library``), at 128 the
+    name of the call that grew it last (64 bytes).
     """
 
-    SIZE = 128
+    SIZE = 192
     _PROBE, _CALL, _FLAG = slice(0, 32), slice(32, 96), 96
     _STARTED, _PROBE_START = slice(104, 112), slice(112, 120)
+    _GROWN, _GREW = slice(120, 128), slice(128, 192)
 
     def __init__(self, buffer: Any | None = None):
         self.buffer = buffer if buffer is not None else bytearray(self.SIZE)
@@ -55,6 +58,18 @@ class CallRecord:
 
     def leave(self) -> None:
         self.buffer[self._FLAG] = 0
+
+    def grew(self, call: str, total: int) -> None:
+        """FMI calls grew the address space by ``total`` bytes so far, ``call`` last."""
+        self.buffer[self._GROWN] = _COUNT.pack(max(0, total))
+        self.buffer[self._GREW] = call.encode()[:64].ljust(64, b"\0")
+
+    @classmethod
+    def growth(cls, data: bytes) -> tuple[int, str]:
+        """(bytes by which FMI calls grew the address space, the call that grew it last)."""
+        data = bytes(data).ljust(cls.SIZE, b"\0")
+        return (_COUNT.unpack(data[cls._GROWN])[0],
+                data[cls._GREW].split(b"\0", 1)[0].decode("ascii", "replace"))
 
     @classmethod
     def parse(cls, data: bytes) -> tuple[str, str, bool]:

@@ -72,6 +72,16 @@ def memory_info(keys: tuple[str, ...] = ("VmSize", "VmRSS")) -> dict[str, int]:
     return out
 
 
+def near_limit(share: float = 0.9) -> bool:
+    """Whether the address space (VmSize) is at ``share`` of its limit (RLIMIT_AS) or more:
+    an allocation or an import that fails then failed for want of memory."""
+    if resource is None:
+        return False
+    limit = resource.getrlimit(resource.RLIMIT_AS)[0]
+    size = memory_info(("VmSize",)).get("VmSize")
+    return limit not in (resource.RLIM_INFINITY, -1) and size is not None and size >= share * limit
+
+
 def reset_peak_memory() -> bool:
     """Start a new peak of the resident size (VmHWM) from now (Linux 4.0 and later: write 5 to
     /proc/self/clear_refs); False where that is not possible, and VmHWM stays the process's."""

@@ -49,7 +49,7 @@ class Instance:
         self.initializing = False    # in Initialization Mode, where fmi3Terminate is not allowed
         self.discrete: DiscreteStates | None = None   # the update that ended initialisation
         self._callback = fmi3LogMessageCallback(library.logger(name))  # kept alive here
-        fmu = library.fmu
+        self._fmu = library.fmu_for_instance()   # the library's, or a copy of its own (alone)
         self.component = self._fmi(
             "fmi3InstantiateModelExchange", name.encode(), self.layout.token.encode(),
             library.resource_path.encode() if library.resource_path else None,
@@ -57,11 +57,10 @@ class Instance:
         if not self.component:
             raise FmiError("fmi3InstantiateModelExchange", "NULL", library.log)
         library.instances.append(self)
-        self._fmu = fmu
 
     def _fmi(self, fname: str, *args: Any, instance: bool = True) -> Any:
         self.calls += 1
-        function = getattr(self.library.fmu, fname)
+        function = getattr(self._fmu, fname)
         try:
             return function(self.component, *args) if instance else function(*args)
         except FmiError as exc:
@@ -206,6 +205,13 @@ class Instance:
                   out.ctypes.data_as(ctypes.POINTER(ctypes.c_double)), n)
         return out
 
+    def get_nominals(self, n: int) -> np.ndarray:
+        """fmi3GetNominalsOfContinuousStates for ``n`` states."""
+        out = np.zeros(n)
+        self._fmi("fmi3GetNominalsOfContinuousStates",
+                  out.ctypes.data_as(ctypes.POINTER(ctypes.c_double)), n)
+        return out
+
     def number_of_event_indicators(self) -> int:
         """fmi3GetNumberOfEventIndicators."""
         count = ctypes.c_size_t()
@@ -293,6 +299,16 @@ class Instance:
         callers that set time, states and algebraic variables themselves (the simulation)."""
         return self._derivative("fmi3GetDirectionalDerivative", unknowns, knowns, seed,
                                 len(unknowns))
+
+    def call(self, fname: str, *args: Any) -> Any:
+        """The FMI function ``fname`` on this instance with ``args`` the caller built (C arrays
+        made once and reused, for a run that makes the same call many times)."""
+        return self._fmi(fname, *args)
+
+    def adjoint_as_set(self, unknowns: Sequence[int], knowns: Sequence[int],
+                       seed: np.ndarray) -> np.ndarray:
+        """fmi3GetAdjointDerivative at the values already set (see :meth:`directional_as_set`)."""
+        return self._derivative("fmi3GetAdjointDerivative", unknowns, knowns, seed, len(knowns))
 
     def variable_dependencies(self, vr: int) -> list[Dependency]:
         """The per-element dependencies of ``vr`` in the instance's current state:

@@ -71,7 +71,11 @@
  *   DEFECT_LATE_CRASH              Continuous-Time Mode: the 5001st FMI call on an instance crashes
  *   DEFECT_LATE_ERROR              Continuous-Time Mode: every FMI call after the 5000th on an
  *                                  instance returns fmi3Error
+ *   DEFECT_LATE_AFTER=<n>          the two above strike after n calls instead of 5000
+ *   DEFECT_LATE_CALL=<function>    ... and only in that FMI function
  *   DEFECT_LEAK                    fmi3GetFloat64 keeps 1 KiB on every call, never freed
+ *   DEFECT_LEAK_CALL=<function>    that FMI function keeps DEFECT_LEAK_BYTES=<n> (default 1024)
+ *                                  bytes on every call, never freed (the leak family)
  *   DEFECT_GLOBAL_STATE            the states x live in one C global shared by every instance
  *   DEFECT_STALE_STATES            a new instance starts from the states of the last one freed
  * and for the read-back probes (tests/fixtures/defects/readback.py), each aimed by READ_KIND
@@ -101,6 +105,9 @@
  *   DEFECT_KNOWN_UNCHECKED         a directional/adjoint known that is no known is taken as x[0]
  *   DEFECT_SEED_SIZE_UNCHECKED     nSeed and nSensitivity are not checked against the counts
  *   DEFECT_CRASH_ON_ILLEGAL_KNOWN  an output given as a known dereferences NULL (crash)
+ *   DEFECT_SHARED=<what>           a C global holds the values, partial derivatives, DAE switch
+ *                                  or inputs of the instances DEFECT_SHARED_BY=<1|2|SHARED_EVERY>
+ *                                  names, and the others read it (the shared-state family)
  */
 #include <math.h>
 #include <stdarg.h>
@@ -206,6 +213,10 @@ typedef struct {
 
     char *name;
     unsigned long ncalls;              /* FMI calls on this instance (DEFECT_LATE_*) */
+#ifdef DEFECT_SHARED
+    int ordinal;                       /* 1 for the process's first instance, 2, ... */
+    int partials_valid;                /* pval is up to date (a cache, derivatives variant) */
+#endif
     fmi3InstanceEnvironment env;
     fmi3LogMessageCallback  logger;
     fmi3Boolean logging;
@@ -268,17 +279,30 @@ static fmi3Status discarded(Instance *c) {
 
 #define FAIL(...) do { logmsg(c, fmi3Error, __VA_ARGS__); return fmi3Error; } while (0)
 
-/* The defects that need sustained use: they strike after LATE_AFTER calls on one instance. */
+/* The defects that need sustained use: they strike after LATE_AFTER calls on one instance
+ * (DEFECT_LATE_AFTER=<n> sets another count, DEFECT_LATE_CALL=<FMI function> strikes in that
+ * function only: the family of late failures, tests/probes/test_late_family.py). */
+#ifdef DEFECT_LATE_AFTER
+#define LATE_AFTER ((unsigned long)(DEFECT_LATE_AFTER))
+#else
 #define LATE_AFTER 5000UL
+#endif
+#ifdef DEFECT_LATE_CALL
+#define LATE_NAME_(x) #x
+#define LATE_NAME(x) LATE_NAME_(x)
+#define LATE_IN(fn) (strcmp((fn), LATE_NAME(DEFECT_LATE_CALL)) == 0)
+#else
+#define LATE_IN(fn) 1
+#endif
 #if defined(DEFECT_LATE_CRASH)
 #define LATE(fn)                                                               \
-    if (++c->ncalls > LATE_AFTER && c->d.state == ContinuousTimeMode) {        \
+    if (++c->ncalls > LATE_AFTER && c->d.state == ContinuousTimeMode && LATE_IN(fn)) { \
         double *volatile gone = NULL;   /* a work buffer released too early */ \
         c->d.t = *gone;                                                        \
     }
 #elif defined(DEFECT_LATE_ERROR)
 #define LATE(fn)                                                               \
-    if (++c->ncalls > LATE_AFTER && c->d.state == ContinuousTimeMode)          \
+    if (++c->ncalls > LATE_AFTER && c->d.state == ContinuousTimeMode && LATE_IN(fn)) \
         FAIL("%s: work buffer exhausted after %lu calls", fn, LATE_AFTER)
 #else
 #define LATE(fn)
@@ -289,11 +313,77 @@ static fmi3Status discarded(Instance *c) {
     Instance *c = (Instance *)instance;                                        \
     if (!c) return fmi3Error;                                                  \
     LATE(fn);                                                                  \
+    LEAK(fn);                                                                  \
+    SHARED_SYNC(c);                                                            \
     if (!(c->d.state & (mask)))                                                \
         FAIL("%s: not allowed in %s", fn, state_name(c->d.state))
 
-#ifdef DEFECT_LEAK
+/*
+ * Leaks, a family (tests/probes/test_leak_family.py): DEFECT_LEAK_CALL=<FMI function> keeps
+ * DEFECT_LEAK_BYTES (default 1024) bytes, written, on every call of that function, never freed:
+ * any function that opens with BEGIN, fmi3InstantiateModelExchange or fmi3FreeInstance.
+ * DEFECT_LEAK is the first member: 1 KiB per fmi3GetFloat64.
+ */
+#if defined(DEFECT_LEAK) && !defined(DEFECT_LEAK_CALL)
+#define DEFECT_LEAK_CALL fmi3GetFloat64
+#endif
+#ifdef DEFECT_LEAK_CALL
+#ifndef DEFECT_LEAK_BYTES
+#define DEFECT_LEAK_BYTES 1024
+#endif
+#define LEAK_NAME_(x) #x
+#define LEAK_NAME(x) LEAK_NAME_(x)
 static void *leaked;                   /* a result cache that only grows */
+static void leak(const char *fn) {
+    void **block;
+    if (strcmp(fn, LEAK_NAME(DEFECT_LEAK_CALL)) != 0) return;
+    block = (void **)malloc((size_t)(DEFECT_LEAK_BYTES) < sizeof(void *) ? sizeof(void *)
+                            : (size_t)(DEFECT_LEAK_BYTES));
+    if (!block) return;
+    memset(block, 1, (size_t)(DEFECT_LEAK_BYTES) < sizeof(void *) ? sizeof(void *)
+           : (size_t)(DEFECT_LEAK_BYTES));
+    block[0] = leaked;
+    leaked = block;
+}
+#define LEAK(fn) leak(fn)
+#else
+#define LEAK(fn)
+#endif
+
+/*
+ * State shared between instances, a family (tests/probes/test_shared_family.py): a C global
+ * holds what each instance should keep for itself.  DEFECT_SHARED says what:
+ *   SHARED_VALUES       the results of the last evaluation (derivatives, residuals, outputs)
+ *   SHARED_DERIVATIVES  the partial derivatives (cached per point, as generated code does)
+ *   SHARED_MODE         the DAE switch
+ *   SHARED_INPUTS       the inputs
+ * and DEFECT_SHARED_BY which instances write it: 1 (the process's first instance), 2 (the
+ * second) or SHARED_EVERY.  The others read it instead of their own copy once it was written
+ * (with SHARED_EVERY every instance writes and reads it: one copy for all).  An instance alone
+ * in its process (in its own copy of the library) computes right in every member.
+ */
+#define SHARED_VALUES 1
+#define SHARED_DERIVATIVES 2
+#define SHARED_MODE 3
+#define SHARED_INPUTS 4
+#define SHARED_EVERY 0
+#ifdef DEFECT_SHARED
+#ifndef DEFECT_SHARED_BY
+#define DEFECT_SHARED_BY SHARED_EVERY
+#endif
+static int shared_created;             /* instances instantiated in this process */
+static int shared_set;                 /* the global was written */
+static double shared_values[3 * NMAX]; /* der, res, y */
+static double *shared_partials;        /* nnz values, allocated when first written */
+static fmi3Boolean shared_dae;
+static double shared_u[NMAX];
+#define SHARED_WRITES(c) (DEFECT_SHARED_BY == SHARED_EVERY || (c)->ordinal == DEFECT_SHARED_BY)
+#define SHARED_READS(c) (DEFECT_SHARED_BY == SHARED_EVERY || (c)->ordinal != DEFECT_SHARED_BY)
+static void changed(Data *d);
+static void shared_sync(void *instance);
+#define SHARED_SYNC(c) shared_sync(c)
+#else
+#define SHARED_SYNC(c)
 #endif
 #ifdef DEFECT_GLOBAL_STATE
 static double global_x[NMAX];          /* generated code's one state vector for every instance */
@@ -400,6 +490,33 @@ static void reset_data(Instance *c) {
 }
 
 static void changed(Data *d) { d->w_consistent = 0; d->eval_valid = 0; }
+
+#ifdef DEFECT_SHARED
+/* At the start of every call: a reading instance takes what the global holds. */
+static void shared_sync(void *instance) {
+    Instance *c = (Instance *)instance;
+    if (!shared_set || !SHARED_READS(c)) return;
+#if DEFECT_SHARED == SHARED_MODE
+    if (c->d.dae != shared_dae) {
+        c->d.dae = shared_dae;
+        changed(&c->d);
+    }
+#elif DEFECT_SHARED == SHARED_INPUTS
+    if (NU > 0 && memcmp(c->u, shared_u, sizeof(double) * (size_t)NU) != 0) {
+        memcpy(c->u, shared_u, sizeof(double) * (size_t)NU);
+        changed(&c->d);
+    }
+#endif
+}
+
+#if DEFECT_SHARED == SHARED_VALUES
+/* After an evaluation: the results a reading instance returns are the global's. */
+static void shared_read_values(Instance *c) {
+    if (shared_set && SHARED_READS(c))
+        memcpy(c->der, shared_values, sizeof(double) * (size_t)(NX + NW + NY));
+}
+#endif
+#endif
 
 /* ODE mode, and Initialization Mode in both modes: the FMU computes w. */
 static int fmu_computes_w(const Instance *c) {
@@ -647,7 +764,19 @@ static fmi3Status update(Instance *c) {
 #endif
         if (discard_reason) return discarded(c);
         d->eval_valid = 1;
+#ifdef DEFECT_SHARED
+        c->partials_valid = 0;
+#if DEFECT_SHARED == SHARED_VALUES
+        if (SHARED_WRITES(c)) {
+            memcpy(shared_values, c->der, sizeof(double) * (size_t)(NX + NW + NY));
+            shared_set = 1;
+        }
+#endif
+#endif
     }
+#if defined(DEFECT_SHARED) && DEFECT_SHARED == SHARED_VALUES
+    shared_read_values(c);   /* what every reader of the results then returns */
+#endif
     return fmi3OK;
 }
 
@@ -757,7 +886,23 @@ static fmi3Status partial_derivatives(fmi3Instance instance, const char *fn, int
         if (known_col(c, knowns[j]) < 0)
             FAIL("%s: %u is not a valid known here", fn, (unsigned)knowns[j]);
     if ((status = update(c)) != fmi3OK) return status;
+#if defined(DEFECT_SHARED) && DEFECT_SHARED == SHARED_DERIVATIVES
+    if (!c->partials_valid) {   /* computed once per point, kept in a global when written */
+        partials_at(c, c->w);
+        c->partials_valid = 1;
+        if (SHARED_WRITES(c) && c->nnz > 0) {
+            if (!shared_partials) shared_partials = (double *)malloc(sizeof(double) * (size_t)c->nnz);
+            if (shared_partials) {
+                memcpy(shared_partials, c->pval, sizeof(double) * (size_t)c->nnz);
+                shared_set = 1;
+            }
+        }
+    }
+    if (shared_set && SHARED_READS(c) && shared_partials)
+        memcpy(c->pval, shared_partials, sizeof(double) * (size_t)c->nnz);
+#else
     partials_at(c, c->w);
+#endif
     if (discard_reason) return discarded(c);
     total = fmu_computes_w(c) && NW > 0;
     if (total && !factor_gw(c)) FAIL("dg/dw is singular at t=%g", c->d.t);
@@ -1127,6 +1272,12 @@ fmi3Instance fmi3InstantiateModelExchange(fmi3String instanceName, fmi3String in
 #ifdef DEFECT_STALE_STATES
     if (have_stale) memcpy(c->x, stale_x, sizeof(double) * (size_t)NX);
 #endif
+#ifdef DEFECT_SHARED
+    c->ordinal = ++shared_created;
+#endif
+#ifdef DEFECT_LEAK_CALL
+    leak("fmi3InstantiateModelExchange");
+#endif
     return c;
 }
 
@@ -1161,6 +1312,9 @@ void fmi3FreeInstance(fmi3Instance instance) {
     Instance *c = (Instance *)instance;
     int k;
     if (!c) return;
+#ifdef DEFECT_LEAK_CALL
+    leak("fmi3FreeInstance");
+#endif
 #ifdef DEFECT_STALE_STATES
     if (c->x) {
         memcpy(stale_x, c->x, sizeof(double) * (size_t)NX);
@@ -1277,16 +1431,6 @@ fmi3Status fmi3GetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], 
     int idx, computed = 0;
     fmi3Status status;
     BEGIN("fmi3GetFloat64", ANY_STATE);
-#ifdef DEFECT_LEAK
-    {
-        void **block = (void **)malloc(1024);
-        if (block) {
-            memset(block, 1, 1024);
-            block[0] = leaked;
-            leaked = block;
-        }
-    }
-#endif
     if (nvr != nValues) FAIL("fmi3GetFloat64: nValues != nValueReferences");
     if (nvr && (!vr || !values)) FAIL("fmi3GetFloat64: NULL argument");
     for (k = 0; k < nvr; k++) {
@@ -1377,6 +1521,12 @@ fmi3Status fmi3SetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], 
         if (kind == K_X && c->d.state == ContinuousTimeMode) continue;   /* "accepted" */
 #endif
         *slot(c, kind, idx) = values[k];
+#if defined(DEFECT_SHARED) && DEFECT_SHARED == SHARED_INPUTS
+        if (kind == K_U && SHARED_WRITES(c)) {
+            memcpy(shared_u, c->u, sizeof(double) * (size_t)NU);
+            shared_set = 1;
+        }
+#endif
     }
 #if defined(DEFECT_SET_KEEPS_CACHE) && KEEPS_CACHE_ON == 3
     if (READ_MODE(c) && c->d.state == ContinuousTimeMode) return fmi3OK;
@@ -1414,6 +1564,12 @@ fmi3Status fmi3SetBoolean(fmi3Instance instance, const fmi3ValueReference vr[], 
         FAIL("fmi3SetBoolean: the structural parameter %u cannot be set in %s",
              (unsigned)MODEL.vr_enable, state_name(c->d.state));
     for (k = 0; k < nvr; k++) c->d.dae = values[k] ? fmi3True : fmi3False;
+#if defined(DEFECT_SHARED) && DEFECT_SHARED == SHARED_MODE
+    if (nvr && SHARED_WRITES(c)) {
+        shared_dae = c->d.dae;
+        shared_set = 1;
+    }
+#endif
     return fmi3OK;
 }
 

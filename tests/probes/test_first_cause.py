@@ -104,6 +104,9 @@ class FakeLibrary:
         self.count += 1
         return f"fake-{mode}-{self.count}"
 
+    def fmu_for_instance(self) -> FakeFmu:
+        return self.fmu
+
 
 def _xml(name: str) -> etree._ElementTree:
     return etree.parse(str(SCENES_DIR / "SimpleDAE" / name))

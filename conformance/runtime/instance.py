@@ -205,13 +205,6 @@ class Instance:
                   out.ctypes.data_as(ctypes.POINTER(ctypes.c_double)), n)
         return out
 
-    def get_nominals(self, n: int) -> np.ndarray:
-        """fmi3GetNominalsOfContinuousStates for ``n`` states."""
-        out = np.zeros(n)
-        self._fmi("fmi3GetNominalsOfContinuousStates",
-                  out.ctypes.data_as(ctypes.POINTER(ctypes.c_double)), n)
-        return out
-
     def number_of_event_indicators(self) -> int:
         """fmi3GetNumberOfEventIndicators."""
         count = ctypes.c_size_t()

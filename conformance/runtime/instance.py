@@ -107,8 +107,10 @@ class Instance:
                               float(next_time.value) if defined else None)
 
     def call(self, fname: str, *args: Any) -> Any:
-        """One FMI call with raw ctypes arguments, counted and checked like every other (for
-        probes that must pass what the methods here never pass: sentinels, wrong sizes)."""
+        """One FMI call with raw ctypes arguments the caller built, counted and checked like
+        every other: for probes that must pass what the methods here never pass (sentinels,
+        wrong sizes), and for a run that makes the same call many times with C arrays made
+        once."""
         return self._fmi(fname, *args)
 
     def enter_continuous_time_mode(self) -> None:
@@ -292,11 +294,6 @@ class Instance:
         callers that set time, states and algebraic variables themselves (the simulation)."""
         return self._derivative("fmi3GetDirectionalDerivative", unknowns, knowns, seed,
                                 len(unknowns))
-
-    def call(self, fname: str, *args: Any) -> Any:
-        """The FMI function ``fname`` on this instance with ``args`` the caller built (C arrays
-        made once and reused, for a run that makes the same call many times)."""
-        return self._fmi(fname, *args)
 
     def adjoint_as_set(self, unknowns: Sequence[int], knowns: Sequence[int],
                        seed: np.ndarray) -> np.ndarray:

@@ -22,9 +22,10 @@ import dataclasses
 import pytest
 
 from conformance.report.catalogue import Catalogue, default_catalogue
-from conformance.report.findings import FmuReport, Severity, thaw
+from conformance.report.findings import FmuReport, thaw
 from conformance.run.engine import EngineOptions, check_fmu
 from tests.fixtures import build_scene
+from tests.reportkit import errors_and_warnings
 
 BUDGET = default_catalogue()["evaluation-fails-late"].option_values
 
@@ -36,14 +37,6 @@ def _check(n: int, call: str = "", *, catalogue: Catalogue | None = None,
         defines.append(f"DEFECT_LATE_CALL={call}")
     return check_fmu(build_scene("HelloWorldDAE", defines=defines), catalogue=catalogue,
                      options=EngineOptions(**options))
-
-
-def _errors(report: FmuReport) -> dict[str, list]:
-    out: dict[str, list] = {}
-    for f in report.findings:
-        if f.severity >= Severity.WARNING:
-            out.setdefault(f.code, []).append(f)
-    return out
 
 
 def _detail(report: FmuReport) -> str:
@@ -65,7 +58,7 @@ def _budget(calls: int) -> Catalogue:
                                   "fmi3GetContinuousStateDerivatives"])
 def test_a_failure_after_ten_calls_is_the_point_probes_finding(call):
     report = _check(10, call)
-    found = _errors(report)
+    found = errors_and_warnings(report)
     assert found, _detail(report)
     # a fresh instance fails as early: no failure that comes with use
     assert "DAE760" not in found
@@ -79,7 +72,7 @@ CALLS = ["fmi3GetFloat64", "fmi3SetFloat64", "fmi3SetTime", "fmi3SetContinuousSt
 def test_a_failure_within_the_budget_is_evaluation_fails_late_in_every_call(call):
     n = 10_000      # beyond the point probes' calls on one instance, within quick's 50,000
     report = _check(n, call, select=("DAE7",))
-    found = _errors(report)
+    found = errors_and_warnings(report)
     assert set(found) == {"DAE760"}, _detail(report)
     finding = found["DAE760"][0]
     assert finding.subject == call
@@ -90,7 +83,7 @@ def test_a_failure_within_the_budget_is_evaluation_fails_late_in_every_call(call
 
 def test_a_failure_after_a_million_calls_is_beyond_the_quick_budget():
     report = _check(1_000_000, "fmi3GetFloat64", select=("DAE76",))
-    assert _errors(report) == {}, _detail(report)
+    assert errors_and_warnings(report) == {}, _detail(report)
     info = thaw(report.info)["endurance"]
     assert info["budget_calls"] <= BUDGET["calls_quick"] < 1_000_000
     assert info["path_calls"] < info["budget_calls"] + 10 < 1_000_000   # a step may end past it
@@ -102,6 +95,6 @@ def test_the_budget_decides_which_late_failures_are_reached(budget, found):
     # arithmetic puts 10^6 beyond quick (50,000) and within long (2,000,000) when the long
     # run is not stopped by its wall-clock safety net first
     report = _check(3_000, "fmi3GetFloat64", catalogue=_budget(budget), select=("DAE76",))
-    assert ("DAE760" in _errors(report)) is found, _detail(report)
+    assert ("DAE760" in errors_and_warnings(report)) is found, _detail(report)
     info = thaw(report.info)["endurance"]
     assert info["budget_calls"] == budget

@@ -22,9 +22,10 @@ import pytest
 
 from conformance.probes.runner import ProbeOutcome, fold_consequences
 from conformance.report.catalogue import default_catalogue
-from conformance.report.findings import FmuReport, Severity, Violation, evidence, thaw
+from conformance.report.findings import FmuReport, Violation, evidence, thaw
 from conformance.run.engine import EngineOptions, check_fmu
 from tests.fixtures import build_scene
+from tests.reportkit import errors_and_warnings
 
 WHAT = ("SHARED_VALUES", "SHARED_DERIVATIVES", "SHARED_MODE", "SHARED_INPUTS")
 BY = ("1", "2", "SHARED_EVERY")
@@ -43,14 +44,6 @@ def _check(*defines: str, scene: str = "SimpleDAE", **options) -> FmuReport:
                      options=EngineOptions(**{"select": SELECT, **options}))
 
 
-def _errors(report: FmuReport) -> dict[str, list]:
-    out: dict[str, list] = {}
-    for f in report.findings:
-        if f.severity >= Severity.WARNING:
-            out.setdefault(f.code, []).append(f)
-    return out
-
-
 def _detail(report: FmuReport) -> str:
     return "\n".join(f"{f.code}: {f.message}" for f in report.findings)
 
@@ -59,7 +52,7 @@ def _detail(report: FmuReport) -> str:
 @pytest.mark.parametrize("what", WHAT)
 def test_a_shared_global_is_instances_not_independent_and_nothing_else(what, by):
     report = _check(f"DEFECT_SHARED={what}", f"DEFECT_SHARED_BY={by}")
-    found = _errors(report)
+    found = errors_and_warnings(report)
     if (what, by) in UNREACHED:
         assert found == {}, _detail(report)
         return
@@ -77,7 +70,7 @@ def test_the_consequences_are_folded_into_the_first_cause(what, by):
     # these members trip derivative, mode or simulation rules on the process's instances
     # (DAE740, DAE747, DAE752, ...); with every instance alone those findings vanish
     report = _check(f"DEFECT_SHARED={what}", f"DEFECT_SHARED_BY={by}")
-    finding = _errors(report)["DAE762"][0]
+    finding = errors_and_warnings(report)["DAE762"][0]
     folded = thaw(finding.evidence)["consequences"]
     assert folded and {c["rule"] for c in folded} <= EXPLAINED
     assert not {c["rule"] for c in folded} & {f.code for f in report.findings}
@@ -88,7 +81,7 @@ def test_without_the_first_cause_the_findings_are_their_own(what, by):
     # DAE762 not selected: nothing explains them, so the rules report what they measured
     report = _check(f"DEFECT_SHARED={what}", f"DEFECT_SHARED_BY={by}",
                     select=tuple(s for s in SELECT if s != "DAE762"))
-    found = _errors(report)
+    found = errors_and_warnings(report)
     assert "DAE762" not in found
     assert set(found) & EXPLAINED, _detail(report)
 
@@ -97,7 +90,7 @@ def test_a_fault_of_its_own_beside_shared_state_stays_its_own():
     # the wrong sign of d der(x1)/d x1 is wrong in an instance alone too: DAE740 reports it
     report = _check("DEFECT_SHARED=SHARED_MODE", "DEFECT_SHARED_BY=SHARED_EVERY",
                     "DEFECT_WRONG_JACOBIAN")
-    found = _errors(report)
+    found = errors_and_warnings(report)
     assert {"DAE762", "DAE740"} <= set(found), _detail(report)
     assert "DAE747" not in found
 
@@ -106,7 +99,7 @@ def test_a_fault_of_its_own_beside_shared_state_stays_its_own():
 def test_independent_instances_are_not_flagged(scene):
     report = _check(scene=scene)
     assert "DAE762" in report.rules_run
-    assert _errors(report) == {}, _detail(report)
+    assert errors_and_warnings(report) == {}, _detail(report)
 
 
 def _outcome(codes: list[str]) -> ProbeOutcome:

@@ -34,8 +34,21 @@ class _Collect(logging.Handler):
             self.stats.append(dict(stats))
 
 
+def _cli() -> Any:
+    """The command line of the ``conformance`` package on the path: ``commands/cli.py`` since the
+    rooms of issue 19, ``cli.py`` before (a baseline checkout). Chosen by the loaded package's own
+    folder, because the editable install's finder would otherwise supply this tree's modules."""
+    import conformance
+
+    if (Path(conformance.__file__).parent / "commands" / "cli.py").exists():
+        from conformance.commands import cli
+    else:
+        from conformance import cli  # type: ignore[no-redef]
+    return cli
+
+
 def run_case(fmu: Path, extra: Sequence[str] = ()) -> dict[str, Any]:
-    from conformance.commands import cli
+    cli = _cli()
 
     collect = _Collect()
     driver_log = logging.getLogger("conformance.probes.driver")

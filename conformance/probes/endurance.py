@@ -86,7 +86,8 @@ def memory_grows(ctx: ProbeContext, *, bytes_per_call_quick: float, bytes_per_ca
     """The worker's resident memory does not grow with the FMI calls of the path run: the
     least-squares slope over the second half of the samples, and each of its quarters alone,
     stay below ``bytes_per_call_<level>``, or the growth over that half below
-    ``min_growth_kib``."""
+    ``min_growth_kib``, or the growth across either quarter below a quarter of it (a leak grows
+    each quarter by about half the total; an allocator step grows one)."""
     bytes_per_call = bytes_per_call_quick if level_of(ctx) == "quick" else bytes_per_call_long
     run = path_run(ctx, RUN_CODES)
     if run.memory_note:
@@ -100,7 +101,8 @@ def memory_grows(ctx: ProbeContext, *, bytes_per_call_quick: float, bytes_per_ca
     if found is None:
         raise ProbeSkipped(f"the path run ended after {run.calls:,} FMI calls ({run.stopped}): "
                            f"too few memory samples ({len(run.samples)}) to judge")
-    if found.sustained_slope < bytes_per_call or found.total < min_growth_kib * KIB:
+    if (found.sustained_slope < bytes_per_call or found.total < min_growth_kib * KIB
+            or min(found.quarter_totals) < min_growth_kib * KIB / 4):
         return
     span = run.samples[-1][0] - run.samples[len(run.samples) // 2][0]
     yield Violation(
@@ -110,6 +112,7 @@ def memory_grows(ctx: ProbeContext, *, bytes_per_call_quick: float, bytes_per_ca
         root_location(ctx),
         evidence(bytes_per_call=round(found.slope), quarter_slopes=[round(q) for q in
                                                                       found.quarters],
+                 quarter_growth_kib=[round(q / KIB) for q in found.quarter_totals],
                  growth_kib=round(found.total / KIB), threshold_bytes_per_call=bytes_per_call,
                  min_growth_kib=min_growth_kib, calls=run.calls, stopped=run.stopped,
                  level=run.settings.level, samples=_growth_samples(run.samples),

@@ -47,3 +47,20 @@ def test_noise_of_a_few_pages_stays_far_below_any_leak():
 def test_too_few_samples_give_no_judgement():
     assert growth(CALLS[:MIN_SAMPLES - 1], CALLS[:MIN_SAMPLES - 1]) is None
     assert growth([], []) is None
+
+
+def test_each_late_quarter_reports_the_growth_its_own_slope_makes():
+    found = growth(CALLS, _pages(BASE + 200.0 * CALLS))
+    assert found is not None
+    assert all(abs(t - 200 * 12_500) < 0.02 * 200 * 12_500 for t in found.quarter_totals)
+    assert abs(sum(found.quarter_totals) - found.total) < 0.02 * found.total
+
+
+def test_a_step_in_a_short_run_leaves_the_other_quarter_a_creep_of_a_few_pages():
+    # a large model's quick path: about 750 calls; a page every ~45 calls (tens of bytes per
+    # call, above the quick threshold of 64) and one 2.7 MiB step of the heap late
+    calls = np.arange(0, 750, 18, dtype=float)
+    rss = _pages(BASE + 90.0 * calls) + np.where(calls > 570, 2.7 * (1 << 20), 0)
+    found = growth(calls, rss)
+    assert found is not None and found.sustained_slope > 64
+    assert min(found.quarter_totals) < 8 * PAGE and max(found.quarter_totals) > 1 << 20

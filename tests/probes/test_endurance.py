@@ -171,6 +171,35 @@ def test_a_run_too_short_to_judge_memory_is_skipped():
         list(memory_grows(ctx, **MEMORY_OPTIONS))
 
 
+# The samples of a correct Chain at N = 10,000 (quick level, 748 calls: the budget in values):
+# a page now and then, and one 2.7 MiB step of the heap when the path instantiates anew.
+CHAIN_10000 = [(0, 0), *((18 * k, 304 + 4 * (k // 3)) for k in range(1, 32)),
+               *((586 + 18 * k, 3024 + 4 * (k // 3)) for k in range(9))]
+
+
+def _judged(samples: list[tuple[int, int]], calls: int) -> list:
+    settings = RunSettings("quick", calls=50_000, values=10**7, seconds=60.0, samples=40,
+                           max_growth_mib=256.0)
+    run = PathRun(settings, calls=calls, stopped="budget", budget_calls=calls,
+                  samples=[(c, (45 << 20) + kib * 1024) for c, kib in samples])
+    return list(memory_grows(_context({FACT: run, "endurance.settings": settings}),
+                             **MEMORY_OPTIONS))
+
+
+def test_an_allocator_step_in_a_short_run_is_not_a_leak():
+    assert _judged(CHAIN_10000, 748) == []
+
+
+@pytest.mark.parametrize("bytes_per_call", [3_000, 12_000, 100_000])
+def test_a_leak_in_a_short_run_is_memory_grows(bytes_per_call):
+    # the same short run, leaking from the first call, with the same step on top
+    leaking = [(c, kib + c * bytes_per_call // 1024) for c, kib in CHAIN_10000]
+    found = _judged(leaking, 748)
+    assert len(found) == 1
+    ev = thaw(found[0].evidence)
+    assert all(q > MEMORY_OPTIONS["min_growth_kib"] / 4 for q in ev["quarter_growth_kib"])
+
+
 def test_a_run_the_safety_net_stopped_is_judged_by_no_rule():
     # the wall clock is a safety net: its end is "not run: time budget", never a verdict,
     # whatever the samples or the calls made would say

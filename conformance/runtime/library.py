@@ -43,13 +43,18 @@ WATCH_EVERY = 32                # one call in WATCH_EVERY is measured until then
 _PAGE = os.sysconf("SC_PAGE_SIZE") if hasattr(os, "sysconf") else 4096
 
 
+_STATM: list[int] = []          # [pid, fd]: /proc/self/statm, kept open by the process that opened it
+
+
 def address_space() -> int | None:
     """The worker's address-space size in bytes (VmSize, from /proc/self/statm; None
-    elsewhere)."""
+    elsewhere). Read with one ``pread`` of a descriptor kept open: it is read around many FMI
+    calls, and opening the file each time cost more than a small model's call."""
     try:
-        with open("/proc/self/statm", "rb") as fh:
-            return int(fh.read(64).split()[0]) * _PAGE
-    except (OSError, ValueError, IndexError):
+        if not _STATM or _STATM[0] != os.getpid():
+            _STATM[:] = [os.getpid(), os.open("/proc/self/statm", os.O_RDONLY | os.O_CLOEXEC)]
+        return int(os.pread(_STATM[1], 64, 0).split()[0]) * _PAGE
+    except (OSError, ValueError, IndexError, AttributeError):
         return None
 
 

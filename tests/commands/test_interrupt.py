@@ -70,7 +70,7 @@ def test_ctrl_c_writes_the_finished_reports_and_exits_within_a_second(tmp_path, 
         reader.start()
     try:
         # wait for the progress line of the clean FMU, however loaded the machine; the hanging
-        # one then waits for its 20 s limit, and the second one after it
+        # one then waits for its per-probe limit (60 s), and the second one after it
         deadline = time.monotonic() + 120
         while f"checked {clean}".encode() not in stderr:
             assert proc.poll() is None, "the run ended before it could be interrupted"

@@ -66,8 +66,11 @@ def run_case(fmu: Path, tree: str | None = None, timeout: float = 900.0) -> dict
     """One ``lsdae check`` of ``fmu`` in a fresh process (``tree``: another checkout's code)."""
     env = dict(os.environ)
     if tree:
+        # the tree's own environment when it has one: this one's editable install would supply
+        # the modules the older tree lacks from this tree
+        own = Path(tree) / ".venv" / "bin" / "python"
         env["PYTHONPATH"] = os.pathsep.join(p for p in (tree, env.get("PYTHONPATH", "")) if p)
-        command = [sys.executable, str(CASE), str(fmu)]
+        command = [str(own) if own.exists() else sys.executable, str(CASE), str(fmu)]
     else:
         command = [sys.executable, "-m", "bench.scale_case", str(fmu)]
     before = os.getloadavg()[0]

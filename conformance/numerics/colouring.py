@@ -25,6 +25,7 @@ from typing import Callable, Iterable, Sequence
 import numpy as np
 
 from . import numdiff
+from .intsets import unique_ints
 
 log = logging.getLogger(__name__)
 
@@ -158,7 +159,7 @@ def one_per_group(pattern: Pattern, *, rows: bool = False) -> Colouring:
 def is_valid(pattern: Pattern, colouring: Colouring) -> bool:
     """No row has two declared columns in one group (the property extraction relies on)."""
     keys = pattern.rows * max(colouring.count, 1) + colouring.group[pattern.cols]
-    return bool(np.unique(keys).size == keys.size)
+    return bool(unique_ints(keys).size == keys.size)
 
 
 @dataclass(frozen=True)

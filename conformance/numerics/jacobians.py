@@ -15,6 +15,8 @@ from typing import Any
 
 import numpy as np
 
+from .intsets import unique_ints
+
 
 def is_sparse(jac: Any) -> bool:
     """Whether ``jac`` is a scipy.sparse matrix (an ndarray otherwise)."""
@@ -70,7 +72,7 @@ class SparseTemplate:
         diagonal = np.arange(n)
         r = np.concatenate([np.asarray(rows, dtype=np.int64), diagonal])
         c = np.concatenate([np.asarray(cols, dtype=np.int64), diagonal])
-        keys = np.unique(c * n + r)             # column-major: the CSC order
+        keys = unique_ints(c * n + r)           # column-major: the CSC order
         self.n, self.keys = n, keys
         indices = (keys % n).astype(np.int32)
         indptr = np.searchsorted(keys // n, np.arange(n + 1)).astype(np.int32)

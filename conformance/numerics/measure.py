@@ -17,6 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import floors, numdiff
+from .intsets import isin_ints
 from .colouring import (Colouring, Function, Pattern, coloured_differences, coloured_products,
                         colour_rows, per_step, predict, predict_abs, random_directions)
 
@@ -133,7 +134,7 @@ def measure(sources: Sources, pattern: Pattern, colouring: Colouring, steps: np.
     if sources.adjoint is not None:
         adj_vals = _coloured_adjoint(adj, pattern, row_colouring or colour_rows(pattern),
                                      active, suspects, rows_ok)
-    keep = ~np.isin(pattern.rows, np.fromiter(suspects, dtype=np.intp, count=len(suspects)))
+    keep = ~isin_ints(pattern.rows, np.fromiter(suspects, dtype=np.intp, count=len(suspects)))
     table = [pattern.rows[keep], pattern.cols[keep], np.ones(int(keep.sum()), dtype=bool),
              fd.value[keep], fd.truncation[keep], fd.rounding[keep], fd.zero[keep],
              dd_vals[keep], adj_vals[keep], steps[pattern.cols[keep]]]
@@ -155,7 +156,7 @@ def _basis(rows: np.ndarray, cols: np.ndarray, values: np.ndarray, x: np.ndarray
 def _hidden(pattern: Pattern, colouring: Colouring, i: int) -> set[int]:
     """Undeclared columns of row ``i`` that share a group with one of its declared columns."""
     declared = pattern.row(i)
-    candidates = np.flatnonzero(np.isin(colouring.group, colouring.group[declared]))
+    candidates = np.flatnonzero(isin_ints(colouring.group, colouring.group[declared]))
     return set(candidates.tolist()) - set(declared.tolist())
 
 

@@ -21,6 +21,7 @@ import numpy as np
 from ..report.catalogue import default_catalogue
 from ..report.findings import Violation, evidence
 from ..numerics import measure
+from ..numerics.intsets import isin_ints
 from .api import ProbeContext
 from .jacobian import PointSurvey, Survey, point_evidence, row_scale
 from .jacobian_layout import JacobianLayout
@@ -176,7 +177,7 @@ def kind_changes(s: Survey, kinds: Mapping[tuple[int, int], str], *, rtol: float
     for p, ps in enumerate(s.points):
         e = ps.entries
         key = e.rows.astype(np.int64) * n + e.cols
-        use = np.isin(key, wanted) & e.declared & np.isfinite(e.fd)
+        use = isin_ints(key, wanted) & e.declared & np.isfinite(e.fd)
         scale = row_scale(layout, e)[e.rows[use]] / layout.nominal[e.cols[use]]
         parts.append((key[use], e.fd[use], e.error(ulps)[use], scale,
                       np.full(int(use.sum()), p), entry_floor(layout, e, ulps=ulps)[use]))

@@ -22,6 +22,7 @@ import numpy as np
 from ..numerics import colouring as col
 from ..report.findings import Violation, evidence
 from ..numerics import measure, numdiff
+from ..numerics.intsets import unique_ints
 from .api import Evaluator, FmiError, Point, ProbeContext, ProbeSkipped
 from .common import renew
 from .jacobian_layout import MODE_NAMES, JacobianLayout, build_layout
@@ -208,7 +209,7 @@ def _publish_jacobian(ctx: ProbeContext, s: Survey) -> None:
     n = len(layout.cols)
     moved = [(e.rows.astype(np.int64) * n + e.cols)[~e.zero & (e.fd != 0)]
              for e in (ps.entries for ps in s.points)]
-    observed = np.unique(np.concatenate(moved)) if moved else np.zeros(0, dtype=np.int64)
+    observed = unique_ints(np.concatenate(moved)) if moved else np.zeros(0, dtype=np.int64)
     p = layout.pattern
     explicit = np.array([r.explicit for r in layout.rows], dtype=bool)
     declared = explicit[p.rows] if p.nnz else np.zeros(0, dtype=bool)

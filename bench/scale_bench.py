@@ -181,13 +181,17 @@ def targets(results: list[dict[str, Any]]) -> list[dict[str, Any]]:
 
 # ------------------------------------------------------------------------------ the report
 
-FAMILY_ORDER = ("setup", "handshake", "basic", "evaluation", "importer_paths", "event_indicators",
-                "derivatives", "dgdw", "initial_unknowns", "simulation", "endurance")
+def _families(results: Sequence[dict[str, Any]]) -> list[str]:
+    """Every family a case logged, in the order the worker ran them (setup first)."""
+    order: dict[str, None] = {}
+    for r in results:
+        order.update(dict.fromkeys(r["families"]))
+    return list(order)
 
 
-def _family_line(r: dict[str, Any]) -> str:
+def _family_line(r: dict[str, Any], families: Sequence[str]) -> str:
     cells = []
-    for name in FAMILY_ORDER:
+    for name in families:
         f = r["families"].get(name)
         cells.append("–" if f is None else
                      f"{f['seconds']:.2f} ({f['fmi_seconds']:.2f}) / {int(f['calls']):,} / "
@@ -197,6 +201,7 @@ def _family_line(r: dict[str, Any]) -> str:
 
 def render_markdown(data: dict[str, Any]) -> str:
     mach = data["machine"]
+    families = _families(data["results"])
     lines = [
         "# Scale benchmark: the full check against the number of variables",
         "",
@@ -254,9 +259,9 @@ def render_markdown(data: dict[str, Any]) -> str:
         "binary, DAE and ODE instances, sampling the points. *probe worker*: the steps' seconds "
         "added up; the rest of the full check is the static stage, the worker's start and the "
         "report.",
-        "", "| scene | N | " + " | ".join(FAMILY_ORDER) + " |",
-        "|---|---|" + "---|" * len(FAMILY_ORDER)]
-    lines += [_family_line(r) for r in data["results"]]
+        "", "| scene | N | " + " | ".join(families) + " |",
+        "|---|---|" + "---|" * len(families)]
+    lines += [_family_line(r, families) for r in data["results"]]
     lines += ["", "![time and memory against the nonzeros](scale.png)", ""]
     return "\n".join(lines)
 
@@ -296,7 +301,7 @@ def plot(data: dict[str, Any], path: Path) -> None:
     largest = [r for r in data["results"] if r["n"] == max(x["n"] for x in data["results"])]
     bottom = [0.0] * len(largest)
     colours = plt.get_cmap("tab20").colors
-    for k, name in enumerate(FAMILY_ORDER):
+    for k, name in enumerate(_families(data["results"])):
         heights = [r["families"].get(name, {}).get("seconds", 0.0) for r in largest]
         if any(heights):
             right.bar([f"{r['scene']}\nN = {r['n']:,}" for r in largest], heights,

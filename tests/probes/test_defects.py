@@ -6,8 +6,9 @@ import re
 import pytest
 
 from conformance.report.catalogue import default_catalogue
-from conformance.run.engine import EngineOptions, check_fmu
+from conformance.run.engine import EngineOptions
 from conformance.report.findings import Severity
+from tests.checkkit import checked
 from tests.fixtures import DEFECTS, Defect, FIXTURES, SCENES_DIR, build_defect
 from tests.reportkit import raw_placeholders
 
@@ -16,7 +17,7 @@ PROBE_RULES = [r for r in default_catalogue() if r.stage == "probe"]
 
 @pytest.mark.parametrize("defect", DEFECTS, ids=[d.id for d in DEFECTS])
 def test_defect_is_caught_by_its_rule_only(defect: Defect):
-    report = check_fmu(build_defect(defect), options=EngineOptions(probes=True))
+    report = checked(build_defect(defect), options=EngineOptions(probes=True))
     expected = {defect.code, *defect.also}
     found = {f.code for f in report.findings
              if f.severity >= Severity.WARNING or f.code in expected}

@@ -9,10 +9,12 @@ serve them all.
 
 The key is the question: the path as given (the report carries it), the file's content (a
 folder: every file's name and content), the options and the catalogue (the default one only).
-Under pytest-xdist the workers share one session folder (the parent of each worker's basetemp,
-``tests/conftest.py`` sets :data:`SHARED`): the first worker to ask computes the report under a
-file lock and pickles it; the other reads it. Without a shared folder the reports are kept in
-this process only.
+The session has one folder for them (``tests/conftest.py`` sets :data:`SHARED`; under
+pytest-xdist the parent of each worker's basetemp, so both workers share it): the first process
+to ask computes the report under a file lock and pickles it; the other reads it. Without the
+folder (outside pytest) the reports are kept in this process only. An FMU a test writes itself
+(a fixed FMU in ``tmp_path``) asks the same question as another test's when it is the same
+file at the same path: :func:`by_content` gives it a path named by its content.
 
 Tests that are about the run itself (determinism, worker counts, timing, deaths, limits) call
 ``check_fmu`` directly: they need a fresh run, not an answer.
@@ -49,6 +51,21 @@ def _content(path: Path) -> bytes:
 def _key(path: Path, options: EngineOptions) -> str:
     question = repr((str(path), _content(path).hex(), options))
     return hashlib.sha256(question.encode()).hexdigest()[:32]
+
+
+def by_content(path: Path) -> Path:
+    """A copy of the file ``path`` in the session's folder, named by its content (``path``
+    itself outside a session)."""
+    if SHARED is None:
+        return path
+    data = path.read_bytes()
+    target = SHARED / "by-content" / f"{hashlib.sha256(data).hexdigest()[:32]}{path.suffix}"
+    if not target.is_file():
+        target.parent.mkdir(parents=True, exist_ok=True)
+        partial = target.with_suffix(f".{os.getpid()}.tmp")
+        partial.write_bytes(data)
+        os.replace(partial, target)
+    return target
 
 
 def checked(path: Path | str, *, options: EngineOptions) -> FmuReport:

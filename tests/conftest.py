@@ -26,10 +26,10 @@ def pytest_addoption(parser: pytest.Parser) -> None:
 
 @pytest.fixture(scope="session", autouse=True)
 def _shared_reports(tmp_path_factory: pytest.TempPathFactory) -> None:
-    """Under pytest-xdist, each worker's basetemp is a folder of the session's: the reports
-    of ``checkkit.checked`` go there, one per question for both workers."""
-    if os.environ.get("PYTEST_XDIST_WORKER"):
-        checkkit.SHARED = tmp_path_factory.getbasetemp().parent / "checked-reports"
+    """The session's folder for the reports of ``checkkit.checked``; under pytest-xdist each
+    worker's basetemp is a folder of the session's, whose parent both workers share."""
+    base = tmp_path_factory.getbasetemp()
+    checkkit.SHARED = (base.parent if os.environ.get("PYTEST_XDIST_WORKER") else base) / "checked"
 
 
 @pytest.fixture

@@ -24,7 +24,8 @@ from conformance.numerics import measure, numdiff
 from conformance.probes.api import ProbeContext
 from conformance.probes.jacobian_layout import build_layout
 from conformance.report.findings import Severity
-from conformance.run.engine import EngineOptions, check_fmu
+from conformance.run.engine import EngineOptions
+from tests.checkkit import checked
 from tests.fixtures import build_scene, chain, variant
 
 MD = MODEL_DESCRIPTION
@@ -84,7 +85,7 @@ def _line(fmu: Path, text: str) -> int:
 ])
 def test_a_dependency_modeldescription_leaves_out_is_found_in_ode_mode(element, known, subject):
     fmu = variant("SimpleDAE", md_edits=((element, _without(element, known)),))
-    report = check_fmu(fmu, options=EngineOptions(probes=True))
+    report = checked(fmu, options=EngineOptions(probes=True))
     assert _bad(report) == [("dependency-undeclared", subject, "ODE mode", MD)]
     (finding,) = [f for f in report.findings if f.name == "dependency-undeclared"]
     assert finding.location.line == _line(fmu, _without(element, known))
@@ -98,7 +99,7 @@ def test_the_same_fault_at_other_sizes(tmp_path, n):
     old = 'ContinuousStateDerivative valueReference="3" dependencies="2 4"'
     fmu = _rewrite_md(chain.build_chain(n), tmp_path / f"chain{n}.fmu", old,
                       'ContinuousStateDerivative valueReference="3" dependencies="4"')
-    report = check_fmu(fmu, options=EngineOptions(probes=True))
+    report = checked(fmu, options=EngineOptions(probes=True))
     assert set(_bad(report)) == {("dependency-undeclared", "d(der(x))/d(x)", "ODE mode", MD)}
     # measured, and reported by fmi3GetVariableDependencies too (Chain declares
     # providesPerElementDependencies; in ODE mode it reports modelDescription's pattern)
@@ -128,7 +129,7 @@ def test_an_event_indicator_dependency_left_out_is_found_by_finite_differences()
     fmu = variant("EventDAE", md_edits=((
         '<EventIndicator valueReference="6" dependencies="1" dependenciesKind="dependent"/>',
         '<EventIndicator valueReference="6" dependencies=""/>'),))
-    report = check_fmu(fmu, options=EngineOptions(probes=True))
+    report = checked(fmu, options=EngineOptions(probes=True))
     assert _bad(report) == [("dependency-undeclared", "d(z)/d(x)", "ODE mode", MD)]
 
 
@@ -141,7 +142,7 @@ def test_an_event_indicator_dependency_left_out_is_found_by_finite_differences()
 ])
 def test_a_kind_the_ode_mode_breaks_is_found(element, known, kind, subject):
     fmu = variant("SimpleDAE", md_edits=((element, _kind(element, known, kind)),))
-    report = check_fmu(fmu, options=EngineOptions(probes=True))
+    report = checked(fmu, options=EngineOptions(probes=True))
     assert _bad(report) == [("dependencies-kind-violated", subject, "ODE mode", MD)]
 
 
@@ -150,7 +151,7 @@ def test_a_constant_kind_that_is_true_stays_clean():
     fmu = variant("EventDAE", md_edits=((
         '<EventIndicator valueReference="6" dependencies="1" dependenciesKind="dependent"/>',
         '<EventIndicator valueReference="6" dependencies="1" dependenciesKind="constant"/>'),))
-    report = check_fmu(fmu, options=EngineOptions(probes=True))
+    report = checked(fmu, options=EngineOptions(probes=True))
     assert _bad(report) == []
 
 
@@ -159,7 +160,7 @@ def test_a_constant_kind_that_is_true_stays_clean():
 def test_an_initial_unknown_of_modeldescription_is_verified_beside_the_manifests():
     # SimpleDAE's manifest lists its own InitialUnknowns: modelDescription's are verified too
     fmu = variant("SimpleDAE", md_edits=((INIT_DER_X2, _without(INIT_DER_X2, 7)),))
-    report = check_fmu(fmu, options=EngineOptions(probes=True))
+    report = checked(fmu, options=EngineOptions(probes=True))
     assert _bad(report) == [("initial-dependency-undeclared", "d(der(x2))/d(u1)", "ODE mode",
                              MD)]
 
@@ -167,7 +168,7 @@ def test_an_initial_unknown_of_modeldescription_is_verified_beside_the_manifests
 # ------------------------------------------------------------------------------- both modes
 
 def test_a_wrong_partial_derivative_behind_both_modes_is_reported_in_each():
-    report = check_fmu(build_scene("SimpleDAE", defines=["DEFECT_WRONG_JACOBIAN"]),
+    report = checked(build_scene("SimpleDAE", defines=["DEFECT_WRONG_JACOBIAN"]),
                        options=EngineOptions(probes=True))
     modes = {f.evidence_dict().get("mode") for f in report.findings
              if f.name == "directional-derivative-mismatch"}
@@ -175,7 +176,7 @@ def test_a_wrong_partial_derivative_behind_both_modes_is_reported_in_each():
 
 
 def test_a_fault_of_ode_mode_alone_leaves_dae_mode_clean():
-    report = check_fmu(build_scene("SimpleDAE", defines=["DEFECT_ODE_DIRECTIONAL_OFF"]),
+    report = checked(build_scene("SimpleDAE", defines=["DEFECT_ODE_DIRECTIONAL_OFF"]),
                        options=EngineOptions(probes=True))
     assert _bad(report) == [("directional-derivative-mismatch", "d(der(x1))/d(x1)", "ODE mode",
                              MD)]

@@ -8,6 +8,7 @@ import pytest
 from conformance.report.catalogue import default_catalogue, with_options
 from conformance.run.engine import EngineOptions, check_fmu
 from conformance.report.findings import Severity
+from tests.checkkit import checked
 from tests.fixtures import DEFECTS, Defect, FIXTURES, SCENES_DIR, build_defect
 from tests.reportkit import raw_placeholders
 
@@ -16,9 +17,11 @@ PROBE_RULES = [r for r in default_catalogue() if r.stage == "probe"]
 
 @pytest.mark.parametrize("defect", DEFECTS, ids=[d.id for d in DEFECTS])
 def test_defect_is_caught_by_its_rule_only(defect: Defect):
-    catalogue = with_options(default_catalogue(), defect.options) if defect.options else None
-    report = check_fmu(build_defect(defect), catalogue=catalogue,
-                       options=EngineOptions(probes=True))
+    if defect.options:  # a rule option of its own (checkkit asks with the default catalogue)
+        report = check_fmu(build_defect(defect), options=EngineOptions(probes=True),
+                           catalogue=with_options(default_catalogue(), defect.options))
+    else:
+        report = checked(build_defect(defect), options=EngineOptions(probes=True))
     expected = {defect.code, *defect.also}
     found = {f.code for f in report.findings
              if f.severity >= Severity.WARNING or f.code in expected}

@@ -22,6 +22,7 @@ from conformance.probes.endurance import KINDS, evaluation_fails_late, memory_gr
 from conformance.probes.endurance_calls import INSTANCE_CYCLE
 from conformance.probes.endurance_run import FACT, PathRun, RunSettings, lap_points
 from conformance.runtime.callrecord import CallRecord
+from tests.checkkit import checked
 from tests.fixtures import build_scene, chain
 
 ENDURANCE = ("DAE760", "DAE761", "DAE762")
@@ -30,7 +31,7 @@ MEMORY_OPTIONS = default_catalogue()["memory-grows"].option_values
 
 
 def _check(scene: str, *defines: str, **options) -> FmuReport:
-    return check_fmu(build_scene(scene, defines=list(defines)), options=EngineOptions(**options))
+    return checked(build_scene(scene, defines=list(defines)), options=EngineOptions(**options))
 
 
 def _only(report: FmuReport, code: str) -> Finding:

@@ -8,6 +8,7 @@ from __future__ import annotations
 import pytest
 
 from conformance.run.engine import EngineOptions, check_fmu
+from tests.checkkit import checked
 from tests.fixtures import build_scene, corpus_names
 
 EVENT_RULES = ("DAE734", "DAE735", "DAE736", "DAE737", "DAE738", "DAE739", "DAE807")
@@ -16,9 +17,10 @@ EVENT_RULES = ("DAE734", "DAE735", "DAE736", "DAE737", "DAE738", "DAE739", "DAE8
 def _findings(scene: str, *defines: str, may_skip: tuple[str, ...] = ()
               ) -> dict[str, list[dict]]:
     """code -> evidence of each finding of the event and call rules (only those run); every
-    one of them runs but ``may_skip``."""
-    report = check_fmu(build_scene(scene, defines=list(defines)),
-                       options=EngineOptions(probes=True, select=EVENT_RULES, endurance="off"))
+    one of them runs but ``may_skip``. The report is kept for the next test that asks the
+    same (the walk-and-simulation test asks two of the family's)."""
+    report = checked(build_scene(scene, defines=list(defines)),
+                     options=EngineOptions(probes=True, select=EVENT_RULES, endurance="off"))
     out: dict[str, list[dict]] = {}
     for f in report.findings:
         out.setdefault(f.code, []).append(dict(f.evidence))

@@ -23,7 +23,8 @@ import pytest
 from conformance.probes.runner import ProbeOutcome, fold_consequences
 from conformance.report.catalogue import default_catalogue
 from conformance.report.findings import FmuReport, Violation, evidence, thaw
-from conformance.run.engine import EngineOptions, check_fmu
+from conformance.run.engine import EngineOptions
+from tests.checkkit import checked
 from tests.fixtures import build_scene
 from tests.reportkit import errors_and_warnings
 
@@ -40,8 +41,10 @@ UNREACHED = {("SHARED_MODE", "2")}                     # the writer never writes
 
 
 def _check(*defines: str, scene: str = "SimpleDAE", **options) -> FmuReport:
-    return check_fmu(build_scene(scene, defines=list(defines)),
-                     options=EngineOptions(**{"select": SELECT, **options}))
+    """The report, once per session for each question (the consequence tests ask some of the
+    family test's again)."""
+    return checked(build_scene(scene, defines=list(defines)),
+                   options=EngineOptions(**{"select": SELECT, **options}))
 
 
 def _detail(report: FmuReport) -> str:

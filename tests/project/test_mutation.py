@@ -7,7 +7,9 @@ with one, CONTRADICTED when its verdict says "consistent" but a promise is broke
 """
 from __future__ import annotations
 
+import fcntl
 from pathlib import Path
+from typing import Any, Callable
 
 import pytest
 
@@ -19,6 +21,7 @@ from bench.mutation.oracle import differences
 from bench.mutation.report import classify, tally, unexplained
 from bench.mutation.targets import Target, all_targets, function_lines, live_lines
 from bench.mutation.verdicts import Verdict, VerdictError, load
+from tests import checkkit
 from tests.fixtures import SCENES_DIR
 
 SOURCE = "HelloWorldDAE/model.c"
@@ -31,9 +34,22 @@ def mutant(old: str, new: str) -> Mutant:
     return Mutant(SOURCE, SOURCE, "HelloWorldDAE", n + 1, TEXT[n], TEXT[n].replace(old, new))
 
 
+class _SessionCache(Cache):
+    """The campaign's result cache in the session's folder (``tests/checkkit.py``): empty when
+    the session starts, so as fresh as ``fresh=True``, and shared by both pytest-xdist workers,
+    each result (the original's check and oracle, a mutant's) computed once under a lock."""
+
+    def get(self, key: str, compute: Callable[[], Any]) -> Any:
+        self.root.mkdir(parents=True, exist_ok=True)
+        with open(self.root / f"{key}.lock", "w") as lock:
+            fcntl.flock(lock, fcntl.LOCK_EX)
+            return super().get(key, compute)
+
+
 @pytest.fixture(scope="module")
 def runner(tmp_path_factory) -> Runner:
-    return Runner(Cache(fresh=True, root=tmp_path_factory.mktemp("results")))
+    shared = checkkit.SHARED or tmp_path_factory.mktemp("checked")
+    return Runner(_SessionCache(root=shared / "mutation-results"))
 
 
 @pytest.mark.parametrize("old, new", [

@@ -75,7 +75,7 @@ def test_a_folder_is_keyed_on_its_files_names_and_bytes(session):
 
 
 def test_by_content_names_the_same_bytes_alike(session):
-    one, two = session / "one" / "f.fmu", session / "two" / "f.archive"
+    one, two = session / "one" / "f.fmu", session / "two" / "f.fmu"
     for path in (one, two):
         path.parent.mkdir()
         path.write_bytes(b"same")

@@ -12,14 +12,17 @@ interleaved, and the tables give medians:
 * the targets of issue 22: time(10,000) / time(1,000) <= 12, the full check at 10,000 within
   30 s, the worker under 500 MiB, no finding at any size.
 
-``--baseline TREE`` also checks the Chain with the source tree TREE (another revision's
+A model of 1,000 variables or more is probed by two workers at once (``conformance.probes.lanes``);
+``--one-worker`` also checks each such case with ``--probe-workers 1``, interleaved, for the
+ratio of the two in the same runs. ``--baseline TREE`` also checks the Chain with the source
+tree TREE (another revision's
 checkout: its ``conformance`` package, the same FMUs), interleaved with this tree's runs, for a
 side-by-side ratio. The load of the machine (1-minute load average) is recorded around each
 case: on the shared 2-core machine it is rarely idle. Writes ``scale.md``, ``scale.json`` and
 ``scale.png`` into ``--out``.
 
     python -m bench.scale_bench [--sizes 100,1000,10000] [--runs 3] [--out reports/bench]
-                                [--baseline /path/to/other/checkout]
+                                [--one-worker] [--baseline /path/to/other/checkout]
 """
 from __future__ import annotations
 
@@ -38,6 +41,7 @@ from lxml import etree
 
 from bench.static_bench import machine_info
 from conformance.model.manifest import MANIFEST
+from conformance.probes.lanes import LARGE_MODEL
 from conformance.probes.registry import FAMILY_OF
 from scenes.Blocks import blocks
 from scenes.Chain import chain
@@ -47,6 +51,14 @@ BUILDERS: dict[str, Callable[[int], Path]] = {"Chain": chain.build_chain,
 CASE = Path(__file__).resolve().with_name("scale_case.py")
 TARGET_RATIO, TARGET_SECONDS, TARGET_MIB = 12.0, 30.0, 500.0
 MIB = 1 << 20
+
+
+def variables(fmu: Path) -> int:
+    """The variables of the FMU's modelDescription.xml (what decides the probe workers)."""
+    with zipfile.ZipFile(fmu) as zf:
+        root = etree.fromstring(zf.read("modelDescription.xml"))
+    found = root.find("ModelVariables")
+    return 0 if found is None else len(found)
 
 
 def structural_nonzeros(fmu: Path) -> int:
@@ -62,8 +74,10 @@ def structural_nonzeros(fmu: Path) -> int:
     return total
 
 
-def run_case(fmu: Path, tree: str | None = None, timeout: float = 900.0) -> dict[str, Any]:
-    """One ``lsdae check`` of ``fmu`` in a fresh process (``tree``: another checkout's code)."""
+def run_case(fmu: Path, tree: str | None = None, timeout: float = 900.0,
+             extra: Sequence[str] = ()) -> dict[str, Any]:
+    """One ``lsdae check`` of ``fmu`` in a fresh process (``tree``: another checkout's code;
+    ``extra``: further options of ``lsdae check``)."""
     env = dict(os.environ)
     if tree:
         # the tree's own environment when it has one: this one's editable install would supply
@@ -73,6 +87,8 @@ def run_case(fmu: Path, tree: str | None = None, timeout: float = 900.0) -> dict
         command = [str(own) if own.exists() else sys.executable, str(CASE), str(fmu)]
     else:
         command = [sys.executable, "-m", "bench.scale_case", str(fmu)]
+    if extra:
+        command += ["--", *extra]
     before = os.getloadavg()[0]
     out = subprocess.run(command, capture_output=True, text=True, env=env, timeout=timeout,
                          cwd=tree or None)
@@ -118,6 +134,10 @@ def summarise(runs: list[dict[str, Any]]) -> dict[str, Any]:
                                 for r in runs]),
         "worker_seconds": _median([sum(float(s.get("seconds") or 0.0) for s in r["steps"])
                                    for r in runs]),
+        # each worker's (lane's) steps added up: the longest is the probes' critical path
+        "lane_seconds": [_median([sum(float(s.get("seconds") or 0.0) for s in r["steps"]
+                                      if s.get("lane", 0) == lane) for r in runs])
+                         for lane in sorted({s.get("lane", 0) for s in first["steps"]})],
         "worker_peak_mib": _median([r["worker_peak_rss"] / MIB for r in runs]),
         "parent_peak_mib": _median([r["parent_peak_rss"] / MIB for r in runs]),
         "load": _median([sum(r["load"]) / 2 for r in runs]),
@@ -137,6 +157,9 @@ def run(args: argparse.Namespace, command: str) -> dict[str, Any]:
         for scene, n, fmu in cases:
             print(f"run {k + 1}/{args.runs}: {scene} N = {n}", file=sys.stderr, flush=True)
             raw.setdefault(f"{scene}:{n}", []).append(run_case(fmu))
+            if args.one_worker and variables(fmu) >= LARGE_MODEL:
+                raw.setdefault(f"one:{scene}:{n}", []).append(
+                    run_case(fmu, extra=["--probe-workers", "1"]))
             if args.baseline and scene == "Chain":
                 raw.setdefault(f"baseline:{n}", []).append(run_case(fmu, args.baseline))
     results = []
@@ -145,9 +168,12 @@ def run(args: argparse.Namespace, command: str) -> dict[str, Any]:
                         **summarise(raw[f"{scene}:{n}"])})
     baseline = [{"scene": "Chain", "n": n, **summarise(raw[f"baseline:{n}"])}
                 for n in sizes if f"baseline:{n}" in raw]
+    one = [{"scene": scene, "n": n, **summarise(raw[f"one:{scene}:{n}"])}
+           for scene, n, _ in cases if f"one:{scene}:{n}" in raw]
     return {"date": dt.datetime.now(dt.timezone.utc).isoformat(timespec="seconds"),
             "machine": machine_info(), "runs": args.runs, "command": command,
             "results": results, "baseline": baseline, "baseline_tree": args.baseline or "",
+            "one_worker": one,
             "targets": targets(results)}
 
 
@@ -189,6 +215,11 @@ def _families(results: Sequence[dict[str, Any]]) -> list[str]:
     return list(order)
 
 
+def _lanes(r: dict[str, Any]) -> str:
+    """Each worker's seconds, "a + b" where two ran at once."""
+    return " + ".join(f"{s:.2f}" for s in r.get("lane_seconds") or [r["worker_seconds"]])
+
+
 def _family_line(r: dict[str, Any], families: Sequence[str]) -> str:
     cells = []
     for name in families:
@@ -219,22 +250,38 @@ def render_markdown(data: dict[str, Any]) -> str:
         "",
         "## The whole check",
         "",
-        "| scene | N | nonzeros | full check (s) | runs (s) | probe worker (s) | in the binary "
+        "| scene | N | nonzeros | full check (s) | runs (s) | probe workers (s) | in the binary "
         "(s) | worker peak (MiB) | parent peak (MiB) | findings | rules not run | load |",
         "|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for r in data["results"]:
         lines.append(
             f"| {r['scene']} | {r['n']:,} | {r['nnz']:,} | {r['seconds']:.2f} | "
-            f"{', '.join(f'{s:.1f}' for s in r['seconds_all'])} | {r['worker_seconds']:.2f} | "
+            f"{', '.join(f'{s:.1f}' for s in r['seconds_all'])} | {_lanes(r)} | "
             f"{r['fmi_seconds']:.2f} | {r['worker_peak_mib']:.0f} | "
             f"{r['parent_peak_mib']:.0f} | {len(r['findings'])} | {len(r['rules_not_run'])} | "
             f"{r['load']:.1f} |")
+    lines += ["", "*probe workers*: each worker's steps added up; two figures where two workers "
+              "ran at once (1,000 variables or more, `conformance/probes/lanes.py`). *worker "
+              "peak*: the larger worker's."]
     lines += ["", "## Targets (issue 22)", "", "| scene | target | measured | met |",
               "|---|---|---|---|"]
     for t in data["targets"]:
         met = "–" if t["met"] is None else ("yes" if t["met"] else "**no**")
         lines.append(f"| {t['scene']} | {t['target']} | {t['value']} | {met} |")
+    if data.get("one_worker"):
+        lines += ["", "## Two workers against one", "",
+                  "The same FMUs, checked in the same runs, interleaved (medians): the default "
+                  "(two workers at once from 1,000 variables) and `--probe-workers 1`.", "",
+                  "| scene | N | two workers (s) | one worker (s) | one / two | the one "
+                  "worker's steps (s) | findings the same |", "|---|---|---|---|---|---|---|"]
+        ours = {(r["scene"], r["n"]): r for r in data["results"]}
+        for o in data["one_worker"]:
+            r = ours[(o["scene"], o["n"])]
+            same = [f["code"] for f in o["findings"]] == [f["code"] for f in r["findings"]]
+            lines.append(f"| {o['scene']} | {o['n']:,} | {r['seconds']:.2f} | "
+                         f"{o['seconds']:.2f} | {o['seconds'] / r['seconds']:.2f} | "
+                         f"{_lanes(o)} | {'yes' if same else '**no**'} |")
     if data.get("baseline"):
         lines += ["", f"## Side by side: the Chain with `{data['baseline_tree']}`", "",
                   "The same FMUs, checked in the same runs, interleaved (medians). The issue's "
@@ -256,9 +303,9 @@ def render_markdown(data: dict[str, Any]) -> str:
         "", "## Per probe family", "",
         "Each cell: seconds (of which inside the binary's functions) / FMI calls / the "
         "worker's peak resident size during the family (MiB), medians. *setup*: loading the "
-        "binary, DAE and ODE instances, sampling the points. *probe worker*: the steps' seconds "
-        "added up; the rest of the full check is the static stage, the worker's start and the "
-        "report.",
+        "binary, DAE and ODE instances, sampling the points (in each worker: two where two "
+        "ran). The families of the two workers run at the same time; the rest of the full check "
+        "is the static stage, the workers' start and the report.",
         "", "| scene | N | " + " | ".join(families) + " |",
         "|---|---|" + "---|" * len(families)]
     lines += [_family_line(r, families) for r in data["results"]]
@@ -322,6 +369,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--sizes", default="100,1000,10000")
     parser.add_argument("--scenes", default="Chain,Blocks")
     parser.add_argument("--runs", type=int, default=3)
+    parser.add_argument("--one-worker", action="store_true",
+                        help="also check the cases of 1,000 variables or more with one worker")
     parser.add_argument("--baseline", default="",
                         help="another checkout whose code checks the Chain side by side")
     args = parser.parse_args(argv)

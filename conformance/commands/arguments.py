@@ -95,6 +95,9 @@ def _check_arguments(check: argparse.ArgumentParser) -> None:
                        help="endurance probes: thousands of calls on one instance, memory "
                             "growth, instance independence (default: quick; long: a longer "
                             "budget; off: skip them)")
+    check.add_argument("--probe-workers", choices=("auto", "1", "2"), default="auto",
+                       help="probe workers at once for one FMU (auto: two for an FMU of 1,000 "
+                            "variables or more; the findings are the same)")
     check.add_argument("--seed", type=int, default=0,
                        help="seed for the probes' sampled points (recorded in the report)")
     check.add_argument("--config", type=Path, metavar="PYPROJECT",

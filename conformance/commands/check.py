@@ -68,7 +68,13 @@ def _options(args: argparse.Namespace, config: dict | None = None) -> EngineOpti
         probes=not args.no_probes and bool(config.get("probes", True)),
         probes_only=args.probes_only, seed=args.seed,
         endurance=args.endurance or config.get("endurance", "quick"),
+        probe_workers=_probe_workers(getattr(args, "probe_workers", None)),
     )
+
+
+def _probe_workers(chosen: str | None) -> int:
+    """``--probe-workers``: 1 or 2, or 0 for auto (the default, and commands without it)."""
+    return 0 if chosen in (None, "auto") else int(chosen)
 
 
 def _outputs(args: argparse.Namespace) -> list[tuple[str, str | None]]:

@@ -1,7 +1,8 @@
 """The probe stage: dynamic rules that load the FMU's binary in a worker process.
 
-From the top: ``runner`` (parent side, what the engine calls) and ``driver`` (one worker after
-another, deaths as findings); ``job`` (what the parent sends the worker); ``stage`` (the
+From the top: ``runner`` (parent side, what the engine calls), ``lanes`` (which probes run in
+which of two workers at once, for a large FMU) and ``driver`` (one worker after another, deaths
+as findings); ``job`` (what the parent sends the worker); ``stage`` (the
 worker's entry point); ``registry`` (probes by rule code, each family imported on first use);
 the families (``handshake``, ``start_values``, ``basic``, ``evaluation``, ``readback``,
 ``derivatives``, ``dgdw``, ``initial_unknowns``, ``simulation``, ``invariants``, ...), none

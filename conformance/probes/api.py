@@ -31,7 +31,7 @@ from ..runtime.errors import FmiError, Unavailable
 from ..runtime.point import Evaluator, Point
 
 __all__ = ["EVENT_INDICATOR_FAULT", "Evaluator", "FmiError", "INFO_KEYS", "NEXT_EVENT_FAULT",
-           "ODE_DAE_FAULT", "PLANNED", "Point", "Probe", "ProbeContext", "ProbeSkipped", "noted"]
+           "ODE_DAE_FAULT", "PLANNED", "PLANNED_OPTIONS", "Point", "Probe", "ProbeContext", "ProbeSkipped", "noted"]
 
 
 # A probe that cannot run on this FMU raises ProbeSkipped; the message is the reason, reported in
@@ -77,9 +77,12 @@ ODE_DAE_FAULT = "ode_dae.fault"
 # the first finding of next-event-time-not-ahead, which the simulation's
 # next-event-time-behind-during-simulation reads before reporting the same fault again
 NEXT_EVENT_FAULT = "events.next_event_time"
-# The codes this worker runs (a frozenset): a probe may leave a verdict to another rule only when
-# that rule is to run.
+# The codes the check runs (a frozenset), in this worker or in the other one (.lanes): a probe may
+# leave a verdict to another rule only when that rule is to run.
 PLANNED = "planned"
+# The options of every planned probe, by rule name (a dict): what another rule's options say
+# (directional-derivative-mismatch's tolerances) is the same in every worker.
+PLANNED_OPTIONS = "planned.options"
 
 
 def noted(fact: str, code: str, probe: Callable[..., Iterator[Violation]]

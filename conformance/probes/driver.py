@@ -51,20 +51,37 @@ class _Death:
 class Driver:
     """Starts workers until every probe has run or cannot run; turns deaths into findings."""
 
-    def __init__(self, run: Any, tmp: str, probes: list[RuleSpec]):
+    def __init__(self, run: Any, tmp: str, probes: list[RuleSpec], *,
+                 others: list[RuleSpec] | None = None, blocked: list[str] | None = None,
+                 lane: int = 0):
+        """``others``: the probes the other lane's workers run (:mod:`.lanes`), which this
+        lane's workers are told are planned; ``blocked``: the list of FMI functions not to be
+        called again, shared by the lanes; ``lane``: this lane's number, in the steps' stats."""
         self.run, self.tmp, self.remaining = run, tmp, probes
+        self.others, self.lane = list(others or ()), lane
         self.limits = run.limits
         self.call_file = os.path.join(tmp, "call")
         self.stderr_file = os.path.join(tmp, "worker.log")
         self.fmu_deadline = time.monotonic() + self.limits.fmu_seconds
-        self.blocked: list[str] = []   # FMI functions that hung or returned fmi3Fatal
+        # FMI functions that hung or returned fmi3Fatal
+        self.blocked: list[str] = [] if blocked is None else blocked
         self.died: list[str] = []      # probes during which a worker died or was killed
         self.diagnosis = Diagnosis(self)
+        self.stopped = False           # stop(): the check was interrupted
+        self._watch: WorkerProcess | None = None
+
+    def stop(self) -> None:
+        """End this lane from another thread: its worker is killed, and no new one started."""
+        self.stopped = True
+        if self._watch is not None:
+            self._watch.signal_kill()
 
     def drive(self) -> None:
         restarts, own = 0, 0
         while True:
             result = self._one_worker()
+            if self.stopped:
+                return
             if result.own:
                 self._not_run_own(result)
             done = {c for c, _ in self.run.outcome.skipped} | self.run.outcome.run
@@ -104,7 +121,9 @@ class Driver:
         payload = ProbeJob(model=ctx.model, manifest=ctx.manifest, draft=ctx.draft,
                            seed=self.run.seed, endurance=self.run.endurance,
                            died=list(self.died),
-                           probes=[(r.code, r.name, r.option_values) for r in self.remaining])
+                           probes=[(r.code, r.name, r.option_values) for r in self.remaining],
+                           planned=[(r.code, r.name, r.option_values)
+                                    for r in self.remaining + self.others] if self.others else [])
         job = Job(directory=os.path.join(self.tmp, "fmu"), call_file=self.call_file,
                   entry=ENTRY, payload=payload, blocked=list(self.blocked))
         job_file = os.path.join(self.tmp, "job.pickle")
@@ -127,7 +146,9 @@ class Driver:
 
     def _one_worker(self) -> _Death:
         proc = self._start()
-        watch = WorkerProcess(proc)
+        watch = self._watch = WorkerProcess(proc)
+        if self.stopped:   # stop() came while this worker started
+            watch.signal_kill()
         clock = CallClock(self.call_file)
         current = "setup"
         step_deadline = time.monotonic() + self.limits.probe_seconds
@@ -185,6 +206,8 @@ class Driver:
                     elif kind == "end":
                         watch.finish()
                         return _Death("end")
+                if eof and self.stopped:   # killed by stop(): nothing to diagnose
+                    return _Death("end")
                 if eof:  # the channel closed before "end": whatever the exit status, a death
                     watch.finish()
                     return _Death("died", *self.diagnosis.died(current, watch))
@@ -197,7 +220,7 @@ class Driver:
         if not isinstance(stats, dict):
             return
         entry = {"probe": step, **{k: stats.get(k) for k in ("seconds", "calls", "fmi_seconds",
-                                                                 "peak_rss")}}
+                                                                 "peak_rss")}, "lane": self.lane}
         self.run.outcome.stats.append(entry)
         peak = entry["peak_rss"]
         log.debug("%s: %.3f s (%.3f s in the binary), %s FMI calls, peak resident %s",

@@ -22,7 +22,7 @@ from ..report.catalogue import default_catalogue
 from ..report.findings import Violation, evidence
 from ..numerics import measure
 from ..numerics.intsets import isin_ints
-from .api import ProbeContext
+from .api import PLANNED_OPTIONS, ProbeContext
 from .jacobian import PointSurvey, Survey, point_evidence, row_scale
 from .jacobian_layout import JacobianLayout
 
@@ -251,13 +251,16 @@ OPTIONS_FACT = "derivatives.directional_options"
 
 def directional_options(ctx: ProbeContext) -> dict:
     """The options of directional-derivative-mismatch (``rtol``, ``margin``, ``ulps``): as it ran
-    in this worker (it records them), else its catalogue defaults. What "confirmed" means for
-    every use of the FMU's directional derivatives."""
+    in this worker (it records them), else as the check plans it (in the other worker), else its
+    catalogue defaults. What "confirmed" means for every use of the FMU's directional
+    derivatives."""
     options = ctx.facts.get(OPTIONS_FACT)
     if not isinstance(options, dict):
-        rule = default_catalogue().get(DIRECTIONAL_RULE)
-        options = {k: v for k, v in (rule.option_values if rule else {}).items()
-                   if k in ("rtol", "margin", "ulps")}
+        planned = (ctx.facts.get(PLANNED_OPTIONS) or {}).get(DIRECTIONAL_RULE)
+        if planned is None:
+            rule = default_catalogue().get(DIRECTIONAL_RULE)
+            planned = rule.option_values if rule else {}
+        options = {k: v for k, v in planned.items() if k in ("rtol", "margin", "ulps")}
         ctx.facts[OPTIONS_FACT] = options
     return options
 

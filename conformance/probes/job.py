@@ -23,3 +23,5 @@ class ProbeJob:
     probes: list[tuple[str, str, dict[str, Any]]] = field(default_factory=list)  # code, name, opts
     endurance: str = "quick"       # the endurance level: "quick" or "long" ("off": not run)
     died: list[str] = field(default_factory=list)  # probes during which a worker died before
+    # every probe the check plans, in every worker (code, name, options); empty: ``probes``
+    planned: list[tuple[str, str, dict[str, Any]]] = field(default_factory=list)

@@ -32,6 +32,7 @@ the runner skips them with that reason and they cost nothing.
 """
 from __future__ import annotations
 
+import copy
 import logging
 import os
 import shutil
@@ -45,6 +46,7 @@ from ..report.findings import Violation, evidence
 from ..model.layer import describe_fmu
 from ..runtime.host import host_platform_tuple, library_extension
 from .driver import RUNNER_RULES, Driver
+from .lanes import Lanes, split, workers_for
 from .registry import ENDURANCE, FAMILY_OF, FIRST, FIRST_CAUSE, LAST
 
 log = logging.getLogger(__name__)
@@ -82,22 +84,23 @@ class ProbeOutcome:
     # instances-not-independent's finding by fold_consequences
     consequences: list[tuple[str, Violation]] = field(default_factory=list)
     # what each step of the workers cost: {"probe", "seconds", "calls", "fmi_seconds",
-    # "peak_rss"}; logged,
-    # never part of the report (it differs from run to run)
+    # "peak_rss", "lane"}; logged, never part of the report (it differs from run to run)
     stats: list[dict[str, Any]] = field(default_factory=list)
 
 
 def run_probes(source: Any, ctx: Any, rules: Sequence[RuleSpec], *, seed: int = 0,
-               endurance: str = "quick") -> ProbeOutcome:
+               endurance: str = "quick", workers: int = 0) -> ProbeOutcome:
     """Run the enabled probe-stage ``rules`` on one FMU; never raises for a bad FMU.
-    ``endurance`` is the level of the endurance probes: "off", "quick" or "long"."""
-    return _Run(source, ctx, rules, seed, endurance).run()
+    ``endurance`` is the level of the endurance probes: "off", "quick" or "long"; ``workers``
+    the workers at once, 1 or 2 (0: by the model's size, :func:`.lanes.workers_for`)."""
+    return _Run(source, ctx, rules, seed, endurance, workers).run()
 
 
 class _Run:
     def __init__(self, source: Any, ctx: Any, rules: Sequence[RuleSpec], seed: int,
-                 endurance: str = "quick"):
+                 endurance: str = "quick", workers: int = 0):
         self.source, self.ctx, self.seed, self.endurance = source, ctx, seed, endurance
+        self.workers = workers
         self.outcome = ProbeOutcome()
         self.rules = list(rules)
         self.by_name = {r.name: r for r in rules}
@@ -182,11 +185,37 @@ class _Run:
         try:
             if self._extract(tmp):
                 self.outcome.run.update(r.code for r in self.rules if r.name in RUNNER_RULES)
-                Driver(self, tmp, probes).drive()
+                self._drive(tmp, probes)
         finally:
             shutil.rmtree(tmp, ignore_errors=True)
         fold_consequences(self.outcome)
         return self.outcome
+
+    def _drive(self, tmp: str, probes: list[RuleSpec]) -> None:
+        """One worker after another for the probes; for a large FMU two lanes of them at once
+        (:mod:`.lanes`), each with an outcome of its own, merged in lane order."""
+        lanes = split(probes, workers_for(self.ctx.model, self.workers))
+        if len(lanes) == 1:
+            Driver(self, tmp, probes).drive()
+            return
+        blocked: list[str] = []    # an FMI function one lane must not call, neither may the other
+        runs, drivers = [], []
+        for number, lane in enumerate(lanes):
+            run = copy.copy(self)
+            run.outcome = ProbeOutcome()
+            folder = tmp if number == 0 else os.path.join(tmp, f"lane-{number}")
+            if number:
+                os.mkdir(folder, 0o700)
+                shutil.copytree(os.path.join(tmp, "fmu"), os.path.join(folder, "fmu"))
+            others = [p for other in lanes if other is not lane for p in other]
+            runs.append(run)
+            drivers.append(Driver(run, folder, lane, others=others, blocked=blocked,
+                                  lane=number))
+        log.debug("%d probe workers at once: %s", len(lanes),
+                  " | ".join(" ".join(r.code for r in lane) for lane in lanes))
+        Lanes(drivers).drive()
+        for run in runs:
+            merge(self.outcome, run.outcome)
 
     def _extract(self, tmp: str) -> bool:
         target = os.path.join(tmp, "fmu")
@@ -203,6 +232,18 @@ class _Run:
         return True
 
 
+
+
+def merge(into: ProbeOutcome, lane: ProbeOutcome) -> None:
+    """``lane``'s outcome added to ``into``'s (info: what ``into`` has not yet)."""
+    into.violations.extend(lane.violations)
+    into.consequences.extend(lane.consequences)
+    into.run.update(lane.run)
+    into.skipped.update(lane.skipped)
+    into.not_run.update(lane.not_run)
+    into.stats.extend(lane.stats)
+    for key, value in lane.info.items():
+        into.info.setdefault(key, value)
 
 
 def fold_consequences(outcome: ProbeOutcome) -> None:

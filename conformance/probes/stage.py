@@ -51,7 +51,7 @@ from ..runtime.layout import Layout
 from ..runtime.library import Library
 from ..runtime.modes import start_initialization, start_instance
 from ..runtime.protocol import MEMORY_EXIT, Job, violation_json
-from .api import PLANNED, FmiError, ProbeContext, ProbeSkipped
+from .api import PLANNED, PLANNED_OPTIONS, FmiError, ProbeContext, ProbeSkipped
 from .common import renew_failed
 from .independence import FIRST, survey
 from .jacobian_layout import MODE_NAMES
@@ -71,8 +71,10 @@ class _Stage:
         self.send = send
         self._sent: dict[str, Any] = {}   # the published-once info values already sent
         self._alone: ProbeContext | None = None   # every instance alone (the first cause)
+        # every probe of the check, in this worker or in the other one (.lanes)
+        self.planned = self.payload.planned or self.payload.probes
         self.first_cause: dict[str, Any] | None = next(
-            (options for code, _, options in self.payload.probes if code == FIRST_CAUSE), None)
+            (options for code, _, options in self.planned if code == FIRST_CAUSE), None)
 
     def run(self) -> int:
         started = time.perf_counter()
@@ -120,7 +122,9 @@ class _Stage:
 
     def _context(self, library: Library, layout: Layout) -> ProbeContext:
         facts: dict[str, Any] = {"layout": layout, "library": library, "info": {},
-                                 PLANNED: frozenset(code for code, _, _ in self.payload.probes)}
+                                 PLANNED: frozenset(code for code, _, _ in self.planned),
+                                 PLANNED_OPTIONS: {name: dict(options)
+                                                   for _, name, options in self.planned}}
         evaluators: dict[str, Any] = {}
         modes: dict[str, str] = {}
         for mode in ("dae", "ode"):

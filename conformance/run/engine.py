@@ -142,7 +142,8 @@ def _run_probe_stage(source, ctx: CheckContext, options: EngineOptions, catalogu
         return
     from ..probes.runner import run_probes  # numpy and the worker machinery only when probing
 
-    outcome = run_probes(source, ctx, rules, seed=options.seed, endurance=options.endurance)
+    outcome = run_probes(source, ctx, rules, seed=options.seed, endurance=options.endurance,
+                         workers=options.probe_workers)
     for code, violation in outcome.violations:
         collector.add(catalogue[code], [violation])
     state.run.update(outcome.run)

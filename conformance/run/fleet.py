@@ -44,9 +44,11 @@ def catalogue_fingerprint(catalogue: Catalogue) -> str:
 
 def settings_fingerprint(catalogue: Catalogue, options: EngineOptions) -> str:
     """A digest of what decides the findings apart from the FMU: lsdae's version, the
-    catalogue with its options, and the engine options."""
+    catalogue with its options, and the engine options (but the probe workers at once, which
+    decide how fast, not what)."""
+    chosen = {k: v for k, v in dataclasses.asdict(options).items() if k != "probe_workers"}
     text = json.dumps({"version": __version__, "catalogue": catalogue_fingerprint(catalogue),
-                       "options": dataclasses.asdict(options)}, sort_keys=True, default=str)
+                       "options": chosen}, sort_keys=True, default=str)
     return hashlib.sha256(text.encode("utf-8")).hexdigest()
 
 

@@ -24,6 +24,7 @@ class EngineOptions:
     seed: int = 0
     group_threshold: int = 3
     endurance: str = "quick"          # the endurance probes: "off", "quick" or "long"
+    probe_workers: int = 0            # probe workers at once, 1 or 2; 0: by the FMU's size
 
 
 class RuleSelection:

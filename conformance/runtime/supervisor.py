@@ -114,14 +114,19 @@ class WorkerProcess:
 
     def kill(self) -> None:
         """Kill the worker's whole process group (it runs in a session of its own)."""
-        try:
-            os.killpg(self.proc.pid, signal.SIGKILL)
-        except (ProcessLookupError, PermissionError):
-            pass
+        self.signal_kill()
         if self.returncode is None:
             self._reap(0)
         if self.proc.stdout is not None:
             self.proc.stdout.close()
+
+    def signal_kill(self) -> None:
+        """SIGKILL to the worker's process group, and nothing else: safe from another thread
+        while this one reads (it then reads the end of the channel and cleans up)."""
+        try:
+            os.killpg(self.proc.pid, signal.SIGKILL)
+        except (ProcessLookupError, PermissionError):
+            pass
 
     def how(self) -> str:
         code = self.returncode

@@ -154,3 +154,26 @@ def test_scale_bench_counts_nonzeros_and_sums_families():
                                "runs": 2, "command": "c", "results": [result, big],
                                "targets": sb.targets([result, big]), "baseline": []})
     assert "| Chain | 10,000 | 30,003 | 20.00 |" in text
+
+
+def test_scale_bench_gives_each_workers_time_and_the_one_worker_side_by_side():
+    from bench import scale_bench as sb  # the benchmark harness: only for this test
+
+    assert sb.variables(chain.build_chain(4)) == 14
+    steps = [{"probe": "setup", "seconds": 1.0, "calls": 14, "peak_rss": 100, "lane": 0},
+             {"probe": "setup", "seconds": 1.5, "calls": 14, "peak_rss": 100, "lane": 1},
+             {"probe": "DAE740", "seconds": 6.0, "calls": 30, "peak_rss": 300, "lane": 0},
+             {"probe": "DAE750", "seconds": 4.0, "calls": 9, "peak_rss": 200, "lane": 1}]
+    run = {"seconds": 9.0, "worker_peak_rss": 300 << 20, "parent_peak_rss": 50 << 20,
+           "load": [1.0, 1.0], "findings": [], "rules_not_run": [], "steps": steps}
+    two = {"scene": "Blocks", "n": 1000, "nnz": 29823, **sb.summarise([run])}
+    assert two["lane_seconds"] == [7.0, 5.5] and two["worker_seconds"] == 12.5
+    single = [{**s, "lane": 0} for s in steps[:1] + steps[2:]]
+    one = {"scene": "Blocks", "n": 1000, **sb.summarise([{**run, "seconds": 12.0,
+                                                          "steps": single}])}
+    text = sb.render_markdown({"date": "d", "machine": {"cpu": "c", "usable_cores": 2,
+                                                        "platform": "p", "python": "3"},
+                               "runs": 1, "command": "c", "results": [two], "one_worker": [one],
+                               "targets": sb.targets([two]), "baseline": []})
+    assert "| Blocks | 1,000 | 29,823 | 9.00 | 9.0 | 7.00 + 5.50 |" in text
+    assert "| Blocks | 1,000 | 9.00 | 12.00 | 1.33 | 11.00 | yes |" in text

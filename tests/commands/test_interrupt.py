@@ -49,8 +49,24 @@ def _read_into(stream, sink: bytearray) -> None:
         sink.extend(chunk)
 
 
-@pytest.mark.parametrize("jobs", ["1", "2"])
-def test_ctrl_c_writes_the_finished_reports_and_exits_within_a_second(tmp_path, jobs):
+def _workers_of(pid: int) -> list[int]:
+    """The probe workers still alive that the process ``pid`` started (their environment
+    names their parent: LSDAE_PROBE_PARENT)."""
+    mark = f"LSDAE_PROBE_PARENT={pid}".encode()
+    alive = []
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit():
+            try:
+                if mark in (entry / "environ").read_bytes().split(b"\0"):
+                    alive.append(int(entry.name))
+            except OSError:
+                pass
+    return alive
+
+
+@pytest.mark.parametrize("jobs, workers", [("1", "auto"), ("2", "auto"), ("1", "2")],
+                         ids=["one-job", "two-jobs", "two-probe-workers"])
+def test_ctrl_c_writes_the_finished_reports_and_exits_within_a_second(tmp_path, jobs, workers):
     # short names, so that the progress line names the clean FMU whatever the checkout's path
     clean, hanging = "clean.fmu", "hanging.fmu"
     shutil.copy(build_scene("HelloWorldDAE"), tmp_path / clean)
@@ -59,8 +75,8 @@ def test_ctrl_c_writes_the_finished_reports_and_exits_within_a_second(tmp_path, 
     env = dict(os.environ, PYTHONPATH=str(REPO))
     proc = subprocess.Popen(
         [sys.executable, "-m", "conformance", "check", clean, hanging, hanging,
-         "-j", jobs, "--format", f"json:{out}", "--format", "console", "--color", "never",
-         "--progress", "always"],
+         "-j", jobs, "--probe-workers", workers, "--format", f"json:{out}", "--format",
+         "console", "--color", "never", "--progress", "always"],
         cwd=tmp_path, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
         start_new_session=True, preexec_fn=_default_sigint)
     stdout, stderr = bytearray(), bytearray()
@@ -77,6 +93,10 @@ def test_ctrl_c_writes_the_finished_reports_and_exits_within_a_second(tmp_path, 
             assert time.monotonic() < deadline, bytes(stderr).decode(errors="replace")
             time.sleep(0.1)
         assert proc.poll() is None, "the run ended before it could be interrupted"
+        if jobs == "1":   # the hanging FMU's worker runs (what must not outlive the check)
+            while not _workers_of(proc.pid):
+                assert time.monotonic() < deadline, "no probe worker started"
+                time.sleep(0.05)
         sent = time.monotonic()
         os.killpg(proc.pid, signal.SIGINT)  # what a terminal sends on Ctrl-C
         proc.wait(timeout=10)
@@ -92,3 +112,8 @@ def test_ctrl_c_writes_the_finished_reports_and_exits_within_a_second(tmp_path, 
     assert [f["path"] for f in data["fmus"]] == [clean]
     assert data["interrupted"]["not_checked"] == [hanging, hanging]
     assert b"interrupted" in stdout and b"Traceback" not in stderr
+    if jobs == "1":   # no worker of either lane outlives the check (with -j the pool's own
+        deadline = time.monotonic() + 5   # processes start them)
+        while _workers_of(proc.pid) and time.monotonic() < deadline:
+            time.sleep(0.1)
+        assert _workers_of(proc.pid) == []

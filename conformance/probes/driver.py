@@ -223,7 +223,8 @@ class Driver:
                                                                  "peak_rss")}, "lane": self.lane}
         self.run.outcome.stats.append(entry)
         peak = entry["peak_rss"]
-        log.debug("%s: %.3f s (%.3f s in the binary), %s FMI calls, peak resident %s",
+        log.debug("%s%s: %.3f s (%.3f s in the binary), %s FMI calls, peak resident %s",
+                  f"[worker {self.lane + 1}] " if self.lane or self.others else "",
                   self.run.names(step), float(entry["seconds"] or 0.0),
                   float(entry["fmi_seconds"] or 0.0), entry["calls"],
                   f"{peak / (1 << 20):.0f} MiB" if isinstance(peak, int) else "unknown",

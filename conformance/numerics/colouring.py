@@ -122,26 +122,27 @@ def colour_columns(pattern: Pattern) -> Colouring:
     """Greedy distance-2 colouring of the columns, largest-first (Coleman & Moré 1983).
 
     Each column takes the smallest group not used by a column that shares one of its rows.
-    Cost O(nnz * groups per row); a dense row puts every column in a group of its own.
+    Cost O(nnz * groups per row / 64); a dense row puts every column in a group of its own.
+    The groups a row has used are the bits of one Python integer, so a column's taken groups
+    are an OR of its rows' integers and its group is the lowest bit that is still zero.
     """
     m, n = pattern.shape
-    col_rows: list[list[int]] = [[] for _ in range(n)]
-    for i, j in zip(pattern.rows.tolist(), pattern.cols.tolist()):
-        col_rows[j].append(i)
-    order = sorted(range(n), key=lambda j: (-len(col_rows[j]), j))
-    row_groups: list[set[int]] = [set() for _ in range(m)]
-    group = np.full(n, -1, dtype=np.intp)
+    counts = np.bincount(pattern.cols, minlength=n)
+    rows_by_col = pattern.rows[np.argsort(pattern.cols, kind="stable")].tolist()
+    bounds = np.concatenate(([0], np.cumsum(counts))).tolist()
+    order = np.lexsort((np.arange(n), -counts)).tolist()   # most rows first, then by index
+    used = [0] * m
+    group = [0] * n
     for j in order:
-        taken: set[int] = set()
-        for i in col_rows[j]:
-            taken |= row_groups[i]
-        g = 0
-        while g in taken:
-            g += 1
-        group[j] = g
-        for i in col_rows[j]:
-            row_groups[i].add(g)
-    return Colouring.from_groups(pattern, group)
+        rows = rows_by_col[bounds[j]:bounds[j + 1]]
+        taken = 0
+        for i in rows:
+            taken |= used[i]
+        free = ~taken & (taken + 1)      # the lowest zero bit of taken
+        group[j] = free.bit_length() - 1
+        for i in rows:
+            used[i] |= free
+    return Colouring.from_groups(pattern, np.asarray(group, dtype=np.intp))
 
 
 def colour_rows(pattern: Pattern) -> Colouring:

@@ -27,6 +27,7 @@ from typing import Any, Iterator
 
 import numpy as np
 
+from ..numerics.intsets import isin_ints, unique_ints
 from ..report.findings import Violation, evidence
 from .api import FmiError, ProbeContext, ProbeSkipped
 from .entry_comparison import (
@@ -258,32 +259,42 @@ def dependency_never_observed(ctx: ProbeContext, *, min_points: int) -> Iterator
         yield from in_mode(_never_observed(s, direct if s.mode == "ode" else None), s)
 
 
-def _declared_pairs(layout: Any) -> set[tuple[int, int]]:
-    """(unknown's value reference, known's value reference) of every declared entry."""
+def _declared_pairs(layout: Any) -> np.ndarray:
+    """(unknown's value reference, known's value reference) of every declared entry, as one
+    int64 key each (:func:`_pair_keys`), sorted."""
+    return np.sort(_pair_keys(layout))
+
+
+def _pair_keys(layout: Any) -> np.ndarray:
+    """The key of each declared entry of ``layout``: the unknown's value reference times 2**32
+    plus the known's (value references are 32-bit)."""
     p = layout.pattern
-    return {(layout.rows[i].vr, layout.cols[j].vr)
-            for i, j in zip(p.rows.tolist(), p.cols.tolist())}
+    row_vrs = np.array([r.vr for r in layout.rows], dtype=np.int64)
+    col_vrs = np.array([c.vr for c in layout.cols], dtype=np.int64)
+    return (row_vrs[p.rows] << 32) | col_vrs[p.cols]
 
 
-def _never_observed(s: Survey, direct: set[tuple[int, int]] | None) -> Iterator[Violation]:
-    """``direct``: in ODE mode, DAE mode's declared entries; an ODE-mode entry that is not one
-    of them goes through the algebraic variables and is not judged."""
+def _never_observed(s: Survey, direct: np.ndarray | None) -> Iterator[Violation]:
+    """``direct``: in ODE mode, DAE mode's declared entries (:func:`_declared_pairs`); an
+    ODE-mode entry that is not one of them goes through the algebraic variables and is not
+    judged."""
     layout = s.layout
     assert layout is not None
     n = len(layout.cols)
     explicit = np.array([r.explicit for r in layout.rows], dtype=bool)
+    through_w = np.empty(0, dtype=np.int64)    # entries i * n + j, sorted
     if direct is not None:
         p = layout.pattern
-        through_w = {(i, j) for i, j in zip(p.rows.tolist(), p.cols.tolist())
-                     if (layout.rows[i].vr, layout.cols[j].vr) not in direct}
+        through = ~isin_ints(_pair_keys(layout), direct)
+        through_w = unique_ints(p.rows[through].astype(np.int64) * n + p.cols[through])
     keys, moved = [], []
     for ps in s.points:
         e = ps.entries
         claim = e.declared & explicit[e.rows]
-        if direct is not None and through_w:
-            claim &= np.array([(i, j) not in through_w
-                               for i, j in zip(e.rows.tolist(), e.cols.tolist())], dtype=bool)
-        keys.append(e.rows[claim].astype(np.int64) * n + e.cols[claim])
+        entry = e.rows.astype(np.int64) * n + e.cols
+        if through_w.size:
+            claim &= ~isin_ints(entry, through_w)
+        keys.append(entry[claim])
         moved.append(~e.zero[claim])
     if not keys:
         return
@@ -311,9 +322,9 @@ def _kind_violated(s: Survey, *, rtol: float, margin: float,
                    ulps: float) -> Iterator[Violation]:
     layout = s.layout
     assert layout is not None
-    kind_of = {(i, j): k for i, j, k in zip(layout.pattern.rows.tolist(),
-                                            layout.pattern.cols.tolist(), layout.kinds)
-               if k != "dependent" and layout.rows[i].explicit}
+    rows, cols = layout.pattern.rows, layout.pattern.cols
+    kind_of = {(int(rows[k]), int(cols[k])): kind for k, kind in enumerate(layout.kinds)
+               if kind != "dependent" and layout.rows[int(rows[k])].explicit}
     for (i, j), c in kind_changes(s, kind_of, rtol=rtol, margin=margin, ulps=ulps).items():
         yield Violation(
             f"{{subject}}: declared '{c.kind}', but the partial derivative changes between "

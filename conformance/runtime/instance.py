@@ -318,10 +318,14 @@ class Instance:
         kinds = (ctypes.c_int * n)()
         self._fmi("fmi3GetVariableDependencies", vr, dependent_elements, independents,
                   elements, kinds, n)
-        return [Dependency(int(independents[k]),
-                           DEPENDENCY_KINDS[kinds[k]] if 0 <= kinds[k] < len(DEPENDENCY_KINDS)
-                           else f"invalid ({kinds[k]})", int(elements[k]),
-                           int(dependent_elements[k])) for k in range(n)]
+        names = {k: name for k, name in enumerate(DEPENDENCY_KINDS)}
+        # whole C arrays to lists at once: indexing a ctypes array per element is slow
+        return [Dependency(independent, names.get(kind, f"invalid ({kind})"), element, dependent)
+                for independent, kind, element, dependent in zip(
+                    np.ctypeslib.as_array(independents).tolist(),
+                    np.ctypeslib.as_array(kinds).tolist(),
+                    np.ctypeslib.as_array(elements).tolist(),
+                    np.ctypeslib.as_array(dependent_elements).tolist())]
 
     def _derivative(self, fname: str, unknowns: Sequence[int], knowns: Sequence[int],
                     seed: np.ndarray, n_out: int) -> np.ndarray:

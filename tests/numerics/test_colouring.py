@@ -32,6 +32,36 @@ def test_groups_of_a_banded_pattern_do_not_grow_with_its_size(n):
     assert col.is_valid(banded(n), c)
 
 
+def _greedy_with_sets(pattern: col.Pattern) -> np.ndarray:
+    """The greedy largest-first colouring written plainly, with a set of groups per row: what
+    colour_columns' bitsets must give, group for group."""
+    m, n = pattern.shape
+    col_rows: list[list[int]] = [[] for _ in range(n)]
+    for i, j in zip(pattern.rows.tolist(), pattern.cols.tolist()):
+        col_rows[j].append(i)
+    row_groups: list[set[int]] = [set() for _ in range(m)]
+    group = np.full(n, -1, dtype=np.intp)
+    for j in sorted(range(n), key=lambda j: (-len(col_rows[j]), j)):
+        taken = set().union(*(row_groups[i] for i in col_rows[j]))
+        g = next(g for g in range(n + 1) if g not in taken)
+        group[j] = g
+        for i in col_rows[j]:
+            row_groups[i].add(g)
+    return group
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.integers(1, 80), st.integers(1, 80), st.integers(0, 2**32 - 1), st.floats(0.0, 1.0))
+def test_the_colouring_is_the_plain_greedy_one(m, n, seed, density):
+    """Up to 80 columns, so that more than 64 groups (beyond one machine word) occur."""
+    rng = np.random.default_rng(seed)
+    mask = rng.random((m, n)) < density
+    p = col.Pattern.from_rows(n, [np.flatnonzero(row) for row in mask])
+    c = col.colour_columns(p)
+    assert c.group.tolist() == _greedy_with_sets(p).tolist()
+    assert col.is_valid(p, c)
+
+
 def test_a_dense_row_puts_every_column_in_its_own_group():
     p = col.Pattern.from_rows(5, [[0], [1, 2], range(5)])
     c = col.colour_columns(p)

@@ -322,9 +322,10 @@ def _kind_violated(s: Survey, *, rtol: float, margin: float,
                    ulps: float) -> Iterator[Violation]:
     layout = s.layout
     assert layout is not None
-    rows, cols = layout.pattern.rows, layout.pattern.cols
-    kind_of = {(int(rows[k]), int(cols[k])): kind for k, kind in enumerate(layout.kinds)
-               if kind != "dependent" and layout.rows[int(rows[k])].explicit}
+    explicit = [r.explicit for r in layout.rows]
+    kind_of = {(i, j): kind for i, j, kind in zip(layout.pattern.rows.tolist(),
+                                                  layout.pattern.cols.tolist(), layout.kinds)
+               if kind != "dependent" and explicit[i]}
     for (i, j), c in kind_changes(s, kind_of, rtol=rtol, margin=margin, ulps=ulps).items():
         yield Violation(
             f"{{subject}}: declared '{c.kind}', but the partial derivative changes between "

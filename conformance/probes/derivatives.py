@@ -254,20 +254,15 @@ def dependency_never_observed(ctx: ProbeContext, *, min_points: int) -> Iterator
     Chain scene's d(der(x))/d(u) at N = 300 is below the smallest double), so not seeing it
     move says nothing and is not reported."""
     surveys = _surveys(ctx, min_points=min_points)
-    direct = next((_declared_pairs(s.layout) for s in surveys if s.mode == "dae"), None)
+    direct = next((_pair_keys(s.layout) for s in surveys if s.mode == "dae"), None)
     for s in surveys:
         yield from in_mode(_never_observed(s, direct if s.mode == "ode" else None), s)
 
 
-def _declared_pairs(layout: Any) -> np.ndarray:
-    """(unknown's value reference, known's value reference) of every declared entry, as one
-    int64 key each (:func:`_pair_keys`), sorted."""
-    return np.sort(_pair_keys(layout))
-
-
 def _pair_keys(layout: Any) -> np.ndarray:
-    """The key of each declared entry of ``layout``: the unknown's value reference times 2**32
-    plus the known's (value references are 32-bit)."""
+    """The key of each declared entry of ``layout``, (unknown's value reference, known's value
+    reference) as one int64: the unknown's times 2**32 plus the known's (value references are
+    32-bit)."""
     p = layout.pattern
     row_vrs = np.array([r.vr for r in layout.rows], dtype=np.int64)
     col_vrs = np.array([c.vr for c in layout.cols], dtype=np.int64)
@@ -275,7 +270,7 @@ def _pair_keys(layout: Any) -> np.ndarray:
 
 
 def _never_observed(s: Survey, direct: np.ndarray | None) -> Iterator[Violation]:
-    """``direct``: in ODE mode, DAE mode's declared entries (:func:`_declared_pairs`); an
+    """``direct``: in ODE mode, DAE mode's declared entries (:func:`_pair_keys`); an
     ODE-mode entry that is not one of them goes through the algebraic variables and is not
     judged."""
     layout = s.layout

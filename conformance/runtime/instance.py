@@ -21,6 +21,7 @@ __all__ = ["Dependency", "DiscreteStates", "Instance", "KnownNotSet", "PointNotS
 
 # fmi3DependencyKind in the order of the C enum; fmi3Independent has no XML counterpart (MS-13)
 DEPENDENCY_KINDS = ("independent", "constant", "fixed", "tunable", "discrete", "dependent")
+_KIND_NAMES = dict(enumerate(DEPENDENCY_KINDS))   # fmi3DependencyKind -> its name
 MAX_DEPENDENCIES = 10_000_000   # a larger count from the FMU is garbage, not an allocation
 
 
@@ -318,9 +319,9 @@ class Instance:
         kinds = (ctypes.c_int * n)()
         self._fmi("fmi3GetVariableDependencies", vr, dependent_elements, independents,
                   elements, kinds, n)
-        names = {k: name for k, name in enumerate(DEPENDENCY_KINDS)}
         # whole C arrays to lists at once: indexing a ctypes array per element is slow
-        return [Dependency(independent, names.get(kind, f"invalid ({kind})"), element, dependent)
+        return [Dependency(independent, _KIND_NAMES.get(kind, f"invalid ({kind})"), element,
+                           dependent)
                 for independent, kind, element, dependent in zip(
                     np.ctypeslib.as_array(independents).tolist(),
                     np.ctypeslib.as_array(kinds).tolist(),

@@ -127,6 +127,15 @@ def test_other_settings_miss(fmus, tmp_path, engine_calls, extra):
     assert engine_calls == []
 
 
+def test_the_probe_workers_are_not_a_setting_of_the_findings(fmus, tmp_path, engine_calls):
+    """--probe-workers decides how fast, not what (conformance/probes/lanes.py): a hit."""
+    cache = tmp_path / "cache"
+    _check(fmus[:2], tmp_path / "first", cache)
+    engine_calls.clear()
+    _check(fmus[:2], tmp_path / "two", cache, "--probe-workers", "2")
+    assert engine_calls == []
+
+
 def test_other_code_misses(fmus, tmp_path, engine_calls, monkeypatch):
     """A development checkout keeps its version across edits: the code itself is in the key."""
     cache = tmp_path / "cache"

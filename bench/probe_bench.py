@@ -2,7 +2,7 @@
 
 Two tables, side by side in one run, medians over ``--runs`` runs (calls do not vary):
 
-1. **Methods.** For every scene FMU, the derivative survey (conformance.probes.derivatives:
+1. **Methods.** For every scene FMU, the derivative survey (conformance.probes.derivatives.partials:
    coloured finite differences, directional and adjoint derivatives, verification of the
    declared zeros) at the seeded sampling points, with forward, central and extrapolated
    differences: FMI calls, wall time, the largest finite-difference error measured against the
@@ -49,10 +49,10 @@ from conformance.model.description import read_model_description
 from conformance.numerics import colouring as col
 from conformance.numerics import measure
 from conformance.report.catalogue import default_catalogue
-from conformance.probes.registry import PROBES
-from conformance.probes import jacobian as J
+from conformance.probes.machinery.registry import PROBES
+from conformance.probes.instruments import jacobian as J
 from conformance.numerics import numdiff
-from conformance.probes.api import ProbeContext
+from conformance.probes.instruments.api import ProbeContext
 from scenes.build import build_scene
 from scenes.Chain import chain
 
@@ -71,7 +71,7 @@ class Fmu(LoadedFmu):
         self.dae = start_instance(self.library, "dae")
 
     def context(self, seed: int = 0, points: int | None = None) -> ProbeContext:
-        from conformance.probes.sampling import near_points, start_point
+        from conformance.probes.instruments.sampling import near_points, start_point
 
         rng = np.random.default_rng(seed)
         start = start_point(self.dae, self.layout)

@@ -7,12 +7,14 @@ interleaved, and the tables give medians:
 
 * the whole check's wall time, the worker's and the parent's peak resident size, the findings
   and the rules not run (both must be empty: the scenes are correct);
-* per probe family (``conformance.probes.registry.FAMILIES``, and the worker's setup): seconds,
-  FMI calls and the peak resident size of the worker during it, from the driver's log records;
+* per probe family (``conformance.probes.machinery.registry.FAMILIES``, and the worker's
+  setup): seconds, FMI calls and the peak resident size of the worker during it, from the
+  driver's log records;
 * the targets of issue 22: time(10,000) / time(1,000) <= 12, the full check at 10,000 within
   30 s, the worker under 500 MiB, no finding at any size.
 
-A model of 1,000 variables or more is probed by two workers at once (``conformance.probes.lanes``);
+A model of 1,000 variables or more is probed by two workers at once
+(``conformance.probes.machinery.lanes``);
 ``--one-worker`` also checks each such case with ``--probe-workers 1``, interleaved, for the
 ratio of the two in the same runs. ``--baseline TREE`` also checks the Chain with the source
 tree TREE (another revision's
@@ -41,8 +43,8 @@ from lxml import etree
 
 from bench.static_bench import machine_info
 from conformance.model.manifest import MANIFEST
-from conformance.probes.lanes import LARGE_MODEL
-from conformance.probes.registry import FAMILY_OF
+from conformance.probes.machinery.lanes import LARGE_MODEL
+from conformance.probes.machinery.registry import FAMILY_OF
 from scenes.Blocks import blocks
 from scenes.Chain import chain
 
@@ -262,8 +264,8 @@ def render_markdown(data: dict[str, Any]) -> str:
             f"{r['parent_peak_mib']:.0f} | {len(r['findings'])} | {len(r['rules_not_run'])} | "
             f"{r['load']:.1f} |")
     lines += ["", "*probe workers*: each worker's steps added up; two figures where two workers "
-              "ran at once (1,000 variables or more, `conformance/probes/lanes.py`). *worker "
-              "peak*: the larger worker's."]
+              "ran at once (1,000 variables or more, `conformance/probes/machinery/lanes.py`). "
+              "*worker peak*: the larger worker's."]
     lines += ["", "## Targets (issue 22)", "", "| scene | target | measured | met |",
               "|---|---|---|---|"]
     for t in data["targets"]:

@@ -5,7 +5,7 @@
 Runs the command line's own entry (``conformance.commands.cli.main``) with the default options and a
 JSON report, and prints one JSON object: the wall time of the whole check, this process's peak
 resident size, what each step of the probe worker cost (seconds, FMI calls, peak resident size,
-from the driver's log records, ``conformance.probes.driver``), and the verdicts (findings by
+from the driver's log records, ``conformance.probes.machinery.driver``), and the verdicts (findings by
 rule, rules not run). A fresh process per case, so that each peak is that case's own.
 """
 from __future__ import annotations
@@ -51,7 +51,7 @@ def run_case(fmu: Path, extra: Sequence[str] = ()) -> dict[str, Any]:
     cli = _cli()
 
     collect = _Collect()
-    driver_log = logging.getLogger("conformance.probes.driver")
+    driver_log = logging.getLogger("conformance.probes.machinery.driver")
     driver_log.setLevel(logging.DEBUG)
     driver_log.propagate = False  # kept, not printed
     driver_log.addHandler(collect)

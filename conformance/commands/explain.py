@@ -7,7 +7,7 @@ import sys
 from ..report.catalogue import Catalogue, RuleSpec, default_catalogue
 from ..model.drafts.names import DRAFT_LABELS
 from .exit_codes import EXIT_OK, UsageError
-from .ruledocs import render_markdown
+from .ruledocs import render_markdown, rule_home
 
 FIX_MARKS = {"safe": "fix", "unsafe": "fix?", None: ""}   # the column of `lsdae rules`
 
@@ -50,6 +50,9 @@ def explain_text(rule: RuleSpec) -> str:
     parts.append(f"Fix:        {rule.fix or 'none: `lsdae fix` leaves this finding'}")
     if rule.aliases:
         parts.append(f"Aliases:    {', '.join(rule.aliases)}")
+    home = rule_home(rule)
+    if home:
+        parts.append(f"Code:       {home}")
     parts += ["", "Why it matters:", _indent(rule.rationale), "", "Fails:", _indent(rule.bad),
               "", "Passes:", _indent(rule.good)]
     if rule.options:

@@ -1,8 +1,59 @@
 """Render the rule catalogue as Markdown (docs/rules.md is generated from it, never by hand)."""
 from __future__ import annotations
 
-from ..report.catalogue import Catalogue, RuleSpec
+import re
+from functools import lru_cache
+from pathlib import Path
+
 from ..model.drafts.names import DRAFT_LABELS
+from ..probes.machinery.registry import FAMILY_PACKAGE, MODULE_OF
+from ..report.catalogue import Catalogue, RuleSpec
+
+#: The rules that no registered check or probe emits: the engine's stages and the probe
+#: driver's deaths, by name -> the module that emits them (tests/checks/test_catalogue.py
+#: checks that each module names its rule).
+EMITTED_BY: dict[str, str] = {
+    **dict.fromkeys(("archive-unreadable", "unsafe-archive-path", "archive-duplicate-entry",
+                     "archive-too-large", "archive-compression-method"),
+                    "conformance.intake.archive.base"),
+    **dict.fromkeys(("xml-not-well-formed", "xml-unsafe-construct"), "conformance.intake.xmlsafe"),
+    "xml-encoding": "conformance.intake.xml_encoding",
+    **dict.fromkeys(("schema-violation", "build-description-invalid"),
+                    "conformance.intake.schemas"),
+    "legacy-draft-shape": "conformance.model.drafts.migrate",
+    "draft-unrecognised": "conformance.model.drafts.detect",
+    **dict.fromkeys(("model-description-missing", "manifest-missing", "fmi-version-unsupported"),
+                    "conformance.run.reading"),
+    "internal-error": "conformance.run.engine",
+    **dict.fromkeys(("binary-crashed", "binary-timed-out", "binary-memory-limit",
+                     "binary-not-loadable"), "conformance.probes.machinery.deaths"),
+}
+
+
+_PACKAGE = Path(__file__).resolve().parents[1]
+
+
+@lru_cache(maxsize=1)
+def _check_modules() -> dict[str, str]:
+    """code -> module of its static check, read from the text of each family's ``CHECKS`` dict
+    (importing ``conformance.checks`` would load lxml into ``lsdae rules``)."""
+    found: dict[str, str] = {}
+    for path in sorted((_PACKAGE / "checks").glob("*.py")):
+        for code in re.findall(r'^\s+"(DAE\d{3})":', path.read_text(encoding="utf-8"), re.M):
+            found[code] = f"conformance.checks.{path.stem}"
+    return found
+
+
+def rule_home(rule: RuleSpec) -> str | None:
+    """The source file of the code that decides ``rule`` (a path from the project's root), or
+    None for a rule of a catalogue of one's own that lsdae does not know."""
+    if rule.stage == "static" and rule.code in _check_modules():
+        module = _check_modules()[rule.code]
+    elif rule.code in MODULE_OF:
+        module = f"{FAMILY_PACKAGE}.{MODULE_OF[rule.code]}"
+    else:
+        module = EMITTED_BY.get(rule.name)
+    return module.replace(".", "/") + ".py" if module else None
 
 HEADER = """# lsdae rules
 
@@ -49,6 +100,9 @@ def _section(rule: RuleSpec) -> str:
         lines += ["", f"Fix ({kind}, `lsdae fix`): {how.strip()}"]
     if rule.aliases:
         lines += ["", f"Aliases: {', '.join(f'`{a}`' for a in rule.aliases)}"]
+    home = rule_home(rule)
+    if home:
+        lines += ["", f"Code: `{home}`"]
     if rule.options:
         lines += ["", "Options:", ""] + [f"- `{k}` = `{v!r}`" for k, v in rule.options]
     return "\n".join(lines)

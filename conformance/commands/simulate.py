@@ -4,7 +4,7 @@
                        [--output-times t1,t2,...] [-o trajectory.csv]
 
 The binary is loaded only in the probe worker process, as for ``lsdae check``: this command runs
-the simulation probes (``conformance/probes/simulation.py``, which call
+the simulation probes (``conformance/probes/simulation/verdicts.py``, which call
 :func:`conformance.simulate.integrate.simulate_instance`) through the engine with its own settings
 (:func:`simulate_fmu`: a copy of the catalogue whose ``simulation-failed`` options are the
 command line's, and whose time limits fit the budget), then reads the trajectories back from the

@@ -1,6 +1,7 @@
 """Plots for the HTML report, drawn with matplotlib's Agg/SVG backends and returned as data URIs.
 
-Two pictures, both from the probes' per-FMU ``info`` (keys in conformance/probes/api.py):
+Two pictures, both from the probes' per-FMU ``info`` (keys in
+conformance/probes/instruments/api.py):
 
 * the sparsity pattern of the DAE Jacobian, declared (ModelStructure and manifest) against
   observed (non-zero directional derivatives at the sampled points);

@@ -140,7 +140,7 @@ def _run_probe_stage(source, ctx: CheckContext, options: EngineOptions, catalogu
         state.skipped.update((r.code, "probes turned off (--no-probes)") for r in rules)
         state.info["probes"] = "not run: probes turned off (--no-probes)"
         return
-    from ..probes.runner import run_probes  # numpy and the worker machinery only when probing
+    from ..probes.machinery.runner import run_probes  # numpy and the worker machinery only when probing
 
     outcome = run_probes(source, ctx, rules, seed=options.seed, endurance=options.endurance,
                          workers=options.probe_workers)

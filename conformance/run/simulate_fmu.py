@@ -1,9 +1,9 @@
 """Simulate one FMU from the parent process: the simulation probes through the engine.
 
-:func:`simulate_fmu` runs the simulation probes (``conformance/probes/simulation.py``, which
-call :func:`conformance.simulate.integrate.simulate_instance` in the worker) through the engine,
-on a copy of the catalogue whose ``simulation-failed`` options are the given settings and whose
-time limits fit the budget, then reads the trajectories back from the report's
+:func:`simulate_fmu` runs the simulation probes (``conformance/probes/simulation/verdicts.py``,
+which call :func:`conformance.simulate.integrate.simulate_instance` in the worker) through the
+engine, on a copy of the catalogue whose ``simulation-failed`` options are the given settings and
+whose time limits fit the budget, then reads the trajectories back from the report's
 ``info["simulation"]``. A crash or hang of the FMU is a ``binary-*`` finding, never a traceback.
 Also what the command reads from modelDescription.xml before it starts: the DefaultExperiment
 and the start values it is given. Used by ``lsdae simulate`` (:mod:`conformance.commands.simulate`).

@@ -6,8 +6,8 @@ The supervisor starts it with a private temporary directory as its working direc
 limits its own address space first (before numpy or fmpy are imported), keeps the original stdout
 as its private channel and points file descriptor 1 at stderr, so whatever the FMU prints cannot
 corrupt the channel. It then reads the pickled :class:`~conformance.runtime.protocol.Job` and
-calls the job's entry point, which sends JSON events (see ``conformance.probes.stage``). An
-exception of ours outside the entry is sent as ``{"event": "worker-error"}``; a MemoryError as
+calls the job's entry point, which sends JSON events (see ``conformance.probes.machinery.stage``).
+An exception of ours outside the entry is sent as ``{"event": "worker-error"}``; a MemoryError as
 ``{"event": "memory"}`` with exit status ``MEMORY_EXIT``.
 """
 from __future__ import annotations

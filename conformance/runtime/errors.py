@@ -4,7 +4,8 @@
 was needed), with the messages the FMU logged during that call. :class:`Unavailable` says that
 what was asked cannot be done on this FMU (no ODE mode without an enable parameter, a function
 not called again after it hung); its message is the reason. The probe stage reports both as the
-reason a rule did not run (``conformance.probes.api.ProbeSkipped`` is :class:`Unavailable`).
+reason a rule did not run (``conformance.probes.instruments.api.ProbeSkipped`` is
+:class:`Unavailable`).
 """
 from __future__ import annotations
 

@@ -15,7 +15,7 @@ Every FMI call made through a :class:`Library` goes through one choke point, ``_
   sampled calls grew it by an estimated ``WATCH_FROM``): each watched call's growth is added
   up in the CallRecord, with the call that grew it last, so that a worker that runs out of
   memory between two FMI calls after the FMU took the memory is the binary's
-  ``binary-memory-limit``, not lsdae's own limit (``conformance.probes.deaths``). Growth
+  ``binary-memory-limit``, not lsdae's own limit (``conformance.probes.machinery.deaths``). Growth
   between calls (lsdae's own imports and arrays) is never counted and never makes every call
   watched.
 

@@ -9,7 +9,7 @@
 The integrators, their settings and limits, and the comparison of two runs are plain numerics
 (``conformance.numerics``: settings, limits, events, dae, ode, compare), tested without a
 binary. The
-simulation probes (``conformance.probes.simulation``) call
+simulation probes (``conformance.probes.simulation.verdicts``) call
 :func:`~conformance.simulate.integrate.simulate_instance` inside the worker process; the
 ``lsdae simulate`` command (``conformance.commands.simulate``) runs those probes through the
 engine and reads the trajectories back from the report. Nothing is imported at package import,

@@ -108,3 +108,32 @@ def test_rule_docs_are_current():
     docs = Path(__file__).resolve().parents[2] / "docs" / "rules.md"
     assert docs.read_text(encoding="utf-8") == render_markdown(CATALOGUE), (
         "docs/rules.md is stale: run `lsdae rules --format markdown > docs/rules.md`")
+
+
+@pytest.mark.parametrize("rule", RULES, ids=[r.code for r in RULES])
+def test_every_rule_points_to_the_module_that_decides_it(rule):
+    """docs/rules.md names each rule's module (issue 28): the registered check's, the probe's,
+    or the engine's or driver's module that emits it by name."""
+    from pathlib import Path
+
+    from conformance.commands.ruledocs import EMITTED_BY, rule_home
+    from conformance.probes.machinery.registry import PROBES
+
+    home = rule_home(rule)
+    root = Path(__file__).resolve().parents[2]
+    assert home and (root / home).is_file(), (rule.code, home)
+    if rule.code in REGISTRY:
+        assert home == REGISTRY[rule.code].__module__.replace(".", "/") + ".py"
+    elif rule.code in PROBES:
+        source = (root / home).read_text(encoding="utf-8")
+        assert f'"{rule.code}":' in source and PROBES[rule.code].__name__ in source
+    else:
+        assert rule.name in EMITTED_BY
+        assert f'"{rule.name}"' in (root / home).read_text(encoding="utf-8")
+    assert f"Code: `{home}`" in render_markdown_of(rule)
+    assert f"Code:       {home}\n" in explain_text(rule)
+
+
+def render_markdown_of(rule) -> str:
+    from conformance.commands.ruledocs import render_markdown
+    return render_markdown(CATALOGUE).split(f"## {rule.code} ", 1)[1].split("\n## ", 1)[0]

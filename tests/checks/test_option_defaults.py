@@ -18,8 +18,8 @@ import pytest
 from conformance.report.catalogue import default_catalogue
 from conformance.checks import REGISTRY
 from conformance.numerics.settings import Settings
-from conformance.probes.registry import PROBES
-from conformance.probes.runner import RUNNER_RULES, Limits
+from conformance.probes.machinery.registry import PROBES
+from conformance.probes.machinery.runner import RUNNER_RULES, Limits
 
 #: What :func:`_defaults_in` reports for an option that is not a parameter of the function.
 NOT_A_PARAMETER = "not a parameter"

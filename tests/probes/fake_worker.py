@@ -1,5 +1,5 @@
-"""A stand-in for the probe stage (``conformance.probes.stage:run_job``) that reaches a limit on
-purpose, for the tests of lsdae's own limits (test_own_limits.py).
+"""A stand-in for the probe stage (``conformance.probes.machinery.stage:run_job``) that reaches a
+limit on purpose, for the tests of lsdae's own limits (test_own_limits.py).
 
 The driver starts it as it would the real stage (the test points ``driver.ENTRY`` here); it
 never loads the binary. ``LSDAE_FAKE_WORKER`` (``BEHAVIOUR:CODE``) says what probe CODE does:

@@ -21,8 +21,8 @@ from lxml import etree
 from conformance.model.description import MODEL_DESCRIPTION, read_model_description
 from conformance.numerics import colouring as col
 from conformance.numerics import measure, numdiff
-from conformance.probes.api import ProbeContext
-from conformance.probes.jacobian_layout import build_layout
+from conformance.probes.instruments.api import ProbeContext
+from conformance.probes.instruments.jacobian_layout import build_layout
 from conformance.report.findings import Severity
 from conformance.run.engine import EngineOptions
 from tests.checkkit import checked

@@ -15,7 +15,7 @@ from lxml import etree
 
 from conformance.model.manifest import MANIFEST, read_manifest
 from conformance.model.description import MODEL_DESCRIPTION, read_model_description
-from conformance.probes.api import Point
+from conformance.probes.instruments.api import Point
 from conformance.runtime.callrecord import CallRecord
 from conformance.runtime.instance import Instance
 from conformance.runtime.layout import Layout

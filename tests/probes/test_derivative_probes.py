@@ -17,9 +17,9 @@ from scipy.optimize import fsolve
 from conformance.report.catalogue import default_catalogue
 from conformance.model.manifest import read_manifest
 from conformance.model.description import read_model_description
-from conformance.probes import derivatives as D
-from conformance.probes import dgdw
-from conformance.probes.api import FmiError, Point, ProbeContext, ProbeSkipped
+from conformance.probes.derivatives import partials as D
+from conformance.probes.derivatives import dgdw
+from conformance.probes.instruments.api import FmiError, Point, ProbeContext, ProbeSkipped
 from tests.fixtures import SCENES_DIR
 
 FAMILY = {**D.PROBES, **dgdw.PROBES}  # the derivative probes and the dg/dw probes
@@ -316,7 +316,7 @@ def test_dgdw_uses_confirmed_directional_derivatives_without_a_note():
 
 
 def test_directional_verdict_uses_the_options_of_directional_derivative_mismatch():
-    from conformance.probes.entry_comparison import OPTIONS_FACT, directional_verdict
+    from conformance.probes.instruments.entry_comparison import OPTIONS_FACT, directional_verdict
 
     ctx = make_ctx("SimpleDAE", directional_hook=_wrong(2, 1, 1.0 + 1e-4))
     s = D.survey(ctx)

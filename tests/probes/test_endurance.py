@@ -16,11 +16,12 @@ from conformance.report.catalogue import Catalogue, default_catalogue
 from conformance.commands.cli import main
 from conformance.run.engine import EngineOptions, check_fmu
 from conformance.report.findings import Finding, FmuReport, thaw
-from conformance.probes import endurance_run
-from conformance.probes.api import Point, ProbeContext, ProbeSkipped
-from conformance.probes.endurance import KINDS, evaluation_fails_late, memory_grows
-from conformance.probes.endurance_calls import INSTANCE_CYCLE
-from conformance.probes.endurance_run import FACT, PathRun, RunSettings, lap_points
+from conformance.probes.endurance import run as endurance_run
+from conformance.probes.instruments.api import Point, ProbeContext, ProbeSkipped
+from conformance.probes.endurance.memory import memory_grows
+from conformance.probes.endurance.sustained import KINDS, evaluation_fails_late
+from conformance.probes.endurance.calls import INSTANCE_CYCLE
+from conformance.probes.endurance.run import FACT, PathRun, RunSettings, lap_points
 from conformance.runtime.callrecord import CallRecord
 from tests.checkkit import checked
 from tests.fixtures import build_scene, chain

@@ -18,9 +18,9 @@ from lxml import etree
 from conformance.report.catalogue import default_catalogue
 from conformance.model.manifest import read_manifest
 from conformance.model.description import read_model_description
-from conformance.probes import basic, evaluation
-from conformance.probes.api import FmiError, Point, ProbeContext, ProbeSkipped
-from conformance.probes.common import renew_failed
+from conformance.probes.evaluation import basic, failures
+from conformance.probes.instruments.api import FmiError, Point, ProbeContext, ProbeSkipped
+from conformance.probes.instruments.common import renew_failed
 from conformance.runtime.instance import Instance, KnownNotSet, PointNotSet
 from conformance.runtime.layout import Layout
 from tests.fixtures import SCENES_DIR
@@ -141,7 +141,7 @@ def run_basic(ctx: ProbeContext) -> tuple[dict[str, list], dict[str, str]]:
         renew_failed(ctx)
         violations: list = []
         try:
-            for v in {**basic.PROBES, **evaluation.PROBES}[code](ctx, **OPTIONS[code]):
+            for v in {**basic.PROBES, **failures.PROBES}[code](ctx, **OPTIONS[code]):
                 violations.append(v)
         except ProbeSkipped as exc:
             skipped[code] = str(exc)
@@ -176,7 +176,7 @@ def test_a_refused_input_is_input_not_settable_and_nothing_else():
 def test_an_input_refused_in_ode_mode_names_ode_mode():
     ctx = make_ctx(lambda mode, fname, c, args: mode == "ode" and fname == "fmi3SetFloat64"
                    and U2 in _vrs(args))
-    (v,) = list(evaluation.input_not_settable(ctx))
+    (v,) = list(failures.input_not_settable(ctx))
     assert v.subject == "u2" and dict(v.evidence)["mode"] == "ODE mode"
 
 
@@ -203,7 +203,7 @@ def test_evaluation_failed_never_blames_a_call_on_a_terminated_instance():
         ctx.dae.set_point(ctx.points[0])     # refused: Terminated since
     # handed the terminated instance, the probe takes a fresh one for every point after a
     # failure: the states' refusal at each point, never fmi3SetTime failing in Terminated
-    found = list(evaluation.evaluation_failed(ctx))
+    found = list(failures.evaluation_failed(ctx))
     assert [v.subject for v in found] == ["fmi3SetContinuousStates"] * 4
     assert {dict(v.evidence)["setting"] for v in found} == {"states"}
 

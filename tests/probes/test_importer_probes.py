@@ -16,8 +16,9 @@ from lxml import etree
 from conformance.report.catalogue import default_catalogue
 from conformance.model.manifest import read_manifest
 from conformance.model.description import read_model_description
-from conformance.probes import event_indicators, importer_paths
-from conformance.probes.api import FmiError, Point, ProbeContext, ProbeSkipped
+from conformance.probes.events import indicators as event_indicators
+from conformance.probes.readback import importer_paths
+from conformance.probes.instruments.api import FmiError, Point, ProbeContext, ProbeSkipped
 from conformance.runtime.layout import Layout
 from tests.fixtures import SCENES_DIR
 

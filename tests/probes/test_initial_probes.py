@@ -19,10 +19,10 @@ from lxml import etree
 from conformance.report.catalogue import default_catalogue
 from conformance.model.manifest import read_manifest
 from conformance.model.description import read_model_description
-from conformance.probes import initial_unknowns as I
-from conformance.probes.api import FmiError, ProbeContext, ProbeSkipped
-from conformance.probes.initial_layout import build_initial_layout
-from conformance.probes.initial_survey import FACT, initial_survey
+from conformance.probes.initialization import unknowns as I
+from conformance.probes.instruments.api import FmiError, ProbeContext, ProbeSkipped
+from conformance.probes.initialization.layout import build_initial_layout
+from conformance.probes.initialization.survey import FACT, initial_survey
 from conformance.runtime.layout import Layout
 
 OPTIONS = {r.code: r.option_values for r in default_catalogue()}  # the one place of defaults

@@ -1,5 +1,5 @@
-"""Two probe workers at once (conformance/probes/lanes.py): the same findings as one worker, on
-the defects whose verdicts cross from one family to another; the split; the interrupt."""
+"""Two probe workers at once (conformance/probes/machinery/lanes.py): the same findings as one
+worker, on the defects whose verdicts cross from one family to another; the split; the interrupt."""
 from __future__ import annotations
 
 import logging
@@ -10,11 +10,11 @@ from types import SimpleNamespace
 
 import pytest
 
-from conformance.probes import lanes
-from conformance.probes.api import PLANNED_OPTIONS
-from conformance.probes.entry_comparison import DIRECTIONAL_RULE, directional_options
-from conformance.probes.registry import FAMILIES, FAMILY_OF, FIRST, LAST, ENDURANCE
-from conformance.probes.lanes import Lanes
+from conformance.probes.machinery import lanes
+from conformance.probes.instruments.api import PLANNED_OPTIONS
+from conformance.probes.instruments.entry_comparison import DIRECTIONAL_RULE, directional_options
+from conformance.probes.machinery.registry import FAMILIES, FAMILY_OF, FIRST, LAST, ENDURANCE
+from conformance.probes.machinery.lanes import Lanes
 from conformance.report.catalogue import default_catalogue
 from conformance.run.engine import EngineOptions
 from tests.checkkit import checked
@@ -83,7 +83,7 @@ def test_a_large_fmu_is_probed_by_two_workers_with_the_findings_of_one(caplog):
     """Chain at N = 500 (1,006 variables, at LARGE_MODEL): two lanes by default; a correct
     FMU, so the same (empty) findings and the same info as one worker."""
     fmu = chain.build_chain(500)
-    caplog.set_level(logging.DEBUG, logger="conformance.probes.driver")
+    caplog.set_level(logging.DEBUG, logger="conformance.probes.machinery.driver")
     two = checked(fmu, options=EngineOptions(probes=True))
     one = checked(fmu, options=EngineOptions(probes=True, probe_workers=1))
     assert _verdicts(two) == _verdicts(one) == ([], [])

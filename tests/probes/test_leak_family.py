@@ -2,7 +2,7 @@
 
 ``-D DEFECT_LEAK_CALL=<function> -D DEFECT_LEAK_BYTES=<n>`` (scenes/common/fmi3_framework.c)
 keeps n bytes, written, on every call of that function. The endurance path run makes every call
-an importer makes (conformance/probes/endurance_calls.py), so a leak anywhere is
+an importer makes (conformance/probes/endurance/calls.py), so a leak anywhere is
 ``memory-grows`` (DAE761, information): by its slope, or, when the run had to stop because
 memory grew by ``max_growth_mib``, by the growth up to the stop; a leak so large that the
 address space runs out before the path run is ``binary-memory-limit`` (DAE703), naming the call

@@ -15,7 +15,7 @@ import pytest
 
 from conformance.report.catalogue import Catalogue, default_catalogue
 from conformance.run.engine import EngineOptions, check_fmu
-from conformance.probes import driver
+from conformance.probes.machinery import driver
 from tests.probes.fake_worker import BEHAVIOUR
 from tests.fixtures import build_scene, chain
 

@@ -22,7 +22,7 @@ import pytest
 from lxml import etree
 
 from conformance.model.description import read_model_description
-from conformance.probes.readable import STATES, readable
+from conformance.probes.evaluation.readable import STATES, readable
 from conformance.report.findings import Finding
 from conformance.run.engine import EngineOptions, check_fmu
 from tests.checkkit import checked

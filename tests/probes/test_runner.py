@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import dataclasses
+import re
 import importlib
 import zipfile
 from pathlib import Path
@@ -13,10 +14,10 @@ from conformance.report.catalogue import Catalogue, default_catalogue
 from conformance.run.engine import EngineOptions, check_fmu, check_paths
 from conformance.report.findings import Severity
 from conformance.model.manifest import MANIFEST
-from conformance.probes import driver, registry, runner
-from conformance.probes.api import Point
-from conformance.probes.registry import PROBES
-from conformance.probes.sampling import near_points, start_point
+from conformance.probes.machinery import driver, registry, runner
+from conformance.probes.instruments.api import Point
+from conformance.probes.machinery.registry import PROBES
+from conformance.probes.instruments.sampling import near_points, start_point
 from conformance.runtime.callrecord import CallRecord
 from conformance.runtime.layout import Layout
 from tests.fixtures import FORMULATION_MANIFEST, build_scene, variant
@@ -73,16 +74,30 @@ def test_probe_registry_matches_probe_catalogue():
     assert set(PROBES) & emitted_by_runner == set()
 
 
-@pytest.mark.parametrize("family", sorted(registry.FAMILIES))
-def test_each_family_holds_exactly_the_codes_the_registry_names(family):
-    module = importlib.import_module(f"conformance.probes.{family}")
-    assert sorted(module.PROBES) == sorted(registry.FAMILIES[family])
+@pytest.mark.parametrize("home", sorted(set(registry.MODULE_OF.values())))
+def test_each_module_holds_exactly_the_codes_the_registry_names(home):
+    family, name = home.split(".")
+    module = importlib.import_module(f"conformance.probes.{home}")
+    assert sorted(module.PROBES) == sorted(registry.MODULES[family][name])
     assert all(PROBES[code] is module.PROBES[code] for code in module.PROBES)
+    assert all(registry.FAMILY_OF[code] == family for code in module.PROBES)
+
+
+def test_no_other_module_of_a_family_holds_probes():
+    """A probe is found only where the registry looks: no family module holds a PROBES dict
+    the registry does not name."""
+    root = Path(importlib.import_module("conformance.probes").__file__).parent
+    for family in registry.MODULES:
+        holders = {p.stem for p in (root / family).glob("*.py")
+                   if re.search(r"^PROBES\b", p.read_text(encoding="utf-8"), re.M)}
+        assert holders == set(registry.MODULES[family]), family
 
 
 def test_no_code_is_in_two_families():
     codes = [code for family in registry.FAMILIES.values() for code in family]
     assert len(codes) == len(set(codes)) == len(PROBES)
+    modules = [code for m in registry.MODULES.values() for codes in m.values() for code in codes]
+    assert sorted(modules) == sorted(codes)
 
 
 def test_limits_come_from_the_catalogue():

@@ -8,7 +8,7 @@ whoever writes it, the verdict is ``instances-not-independent`` (DAE762), found 
 that compares the process's instances with instances alone (each in a copy of the binary of its
 own), and none of the findings it explains: the derivative, mode, value and simulation findings
 that vanish with every instance alone are folded into DAE762's evidence
-(``conformance.probes.stage``, ``runner.fold_consequences``).
+(``conformance.probes.machinery.stage``, ``runner.fold_consequences``).
 
 Two members differ, and the tests say why: a global written only by the process's second
 instance (lsdae's ODE-mode instance) that holds the switch is never written, since that
@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import pytest
 
-from conformance.probes.runner import ProbeOutcome, fold_consequences
+from conformance.probes.machinery.runner import ProbeOutcome, fold_consequences
 from conformance.report.catalogue import default_catalogue
 from conformance.report.findings import FmuReport, Violation, evidence, thaw
 from conformance.run.engine import EngineOptions

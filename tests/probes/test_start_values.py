@@ -14,8 +14,8 @@ import pytest
 from lxml import etree
 
 from conformance.model.description import read_model_description
-from conformance.probes.instantiation import expected_starts
-from conformance.probes.start_values import differs
+from conformance.probes.instruments.instantiation import expected_starts
+from conformance.probes.readback.start_values import differs
 from conformance.report.findings import Severity
 from conformance.run.engine import EngineOptions, check_fmu
 from tests.fixtures import variant

@@ -157,3 +157,43 @@ def test_no_circle_of_imports():
         if node not in state:
             circle = visit(node)
             assert circle is None, "circle of imports: " + " -> ".join(circle)
+
+
+# One floor down, the probe stage by family (docs/architecture.md): ``probes/machinery`` on top
+# (the runner, the worker's stage, the registry, which loads the families by name alone), the
+# families side by side and never importing each other, ``probes/instruments`` below them all.
+PROBE_TOP, PROBE_BOTTOM = "machinery", "instruments"
+
+
+def _probe_rooms() -> set[str]:
+    return {p.name for p in (PACKAGE / "probes").iterdir() if (p / "__init__.py").is_file()}
+
+
+def _probe_families() -> set[str]:
+    from conformance.probes.machinery.registry import FAMILIES
+    return set(FAMILIES)
+
+
+def test_the_probe_rooms_are_the_registry_families_the_machinery_and_the_instruments():
+    entries = {p.name for p in (PACKAGE / "probes").iterdir() if p.name != "__pycache__"}
+    assert entries - _probe_rooms() == {"__init__.py"}, "a loose module in conformance/probes/"
+    assert _probe_rooms() == _probe_families() | {PROBE_TOP, PROBE_BOTTOM}
+    for room in _probe_rooms():
+        doc = ast.get_docstring(ast.parse((PACKAGE / "probes" / room / "__init__.py")
+                                          .read_text("utf-8")))
+        assert doc and "import" in doc, f"conformance/probes/{room}/__init__.py: no docstring"
+
+
+def _allowed(room: str) -> set[str]:
+    if room == PROBE_TOP:
+        return {PROBE_TOP, PROBE_BOTTOM}
+    return {room, PROBE_BOTTOM}
+
+
+@pytest.mark.parametrize("module", sorted(m for m in IMPORTS if m.startswith("probes.")))
+def test_probe_families_import_only_themselves_and_the_instruments(module):
+    room = module.split(".")[1]
+    wrong = [f"line {line}: conformance.{module} imports conformance.{target}"
+             for target, line, _, _ in IMPORTS[module]
+             if target.startswith("probes.") and target.split(".")[1] not in _allowed(room)]
+    assert not wrong, "\n".join(wrong)

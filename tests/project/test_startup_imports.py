@@ -65,8 +65,11 @@ def test_a_static_check_of_a_small_fmu_loads_no_numerical_library(small_fmu, tmp
 def test_a_full_check_loads_the_binary_only_in_the_probe_worker(small_fmu, tmp_path):
     code, loaded = _loaded(["check", small_fmu, "--format", f"json:{tmp_path / 'r.json'}"])
     assert code == 0
-    assert "conformance.probes.runner" in loaded  # the probes did run, in a worker process
+    assert "conformance.probes.machinery.runner" in loaded  # the probes ran, in a worker process
     assert sorted(loaded & set(HEAVY)) == []  # the worker loads numpy, fmpy and the probes
+    from conformance.probes.machinery.registry import FAMILIES
+    families = {f"conformance.probes.{family}" for family in FAMILIES}
+    assert sorted(m for m in loaded if m.rsplit(".", 1)[0] in families or m in families) == []
 
 
 def test_only_parallel_checks_load_multiprocessing(small_fmu, tmp_path):

@@ -128,7 +128,7 @@ def test_other_settings_miss(fmus, tmp_path, engine_calls, extra):
 
 
 def test_the_probe_workers_are_not_a_setting_of_the_findings(fmus, tmp_path, engine_calls):
-    """--probe-workers decides how fast, not what (conformance/probes/lanes.py): a hit."""
+    """--probe-workers decides how fast, not what (conformance/probes/machinery/lanes.py): a hit."""
     cache = tmp_path / "cache"
     _check(fmus[:2], tmp_path / "first", cache)
     engine_calls.clear()

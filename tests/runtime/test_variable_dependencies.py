@@ -18,7 +18,7 @@ from lxml import etree
 from conformance.model.manifest import MANIFEST, Manifest, read_manifest
 from conformance.model.description import (MODEL_DESCRIPTION, ModelDescription, Unknown,
                                            read_model_description)
-from conformance.probes.api import FmiError
+from conformance.probes.instruments.api import FmiError
 from conformance.runtime.callrecord import CallRecord
 from conformance.runtime.instance import Dependency, Instance
 from conformance.runtime.layout import Layout

@@ -1,0 +1,176 @@
+"""What a fresh instance holds right after ``fmi3InstantiateModelExchange``, before any set.
+
+Shared by ``start-value-not-applied`` (:mod:`..readback.start_values`), which compares it with the
+XML start values, and ``reset-incomplete`` (:mod:`..evaluation.handshake`), which must not blame
+fmi3Reset for returning to what instantiation left when that already differs from the XML (one
+fault, one finding: the first cause). Not a family: it registers no probe.
+
+The variables read are those whose XML ``start`` the instance must hold (MV-23, SG-01): a
+``start`` attribute (or ``<Start>`` children) and an effective ``initial`` of exact or approx,
+of every type fmi3Get<type> reads (Float32/64, the integer types, Enumeration, Boolean, String
+scalars); arrays whose size the XML fixes (``<Dimension start>`` or the start of the structural
+parameter it names) are read whole. A start the static stage flags (not a number, not finite)
+is left out: the XML is at fault there, not the binary. Scalars of one type are read in one
+call, so a model of 100k variables costs a handful of calls.
+
+The snapshot is taken once per worker, on an instance of its own, and kept in ``ctx.facts``;
+the probe stage runs ``start-value-not-applied`` first, so no other instance has been freed
+yet (an FMU that keeps state across instances is ``instances-not-independent``'s finding).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+from ...model.description import ModelDescription, Variable
+from ...runtime.records import GETTERS
+from .api import FmiError, ProbeContext
+from .common import new_instance
+
+FACT = "instantiation.values"
+_BOOLEANS = {"true": True, "1": True, "false": False, "0": False}
+
+
+@dataclass
+class Held:
+    """One variable: its XML start values and what the fresh instance returned."""
+
+    var: Variable
+    start: list[Any]                 # one per element (a single XML value is broadcast)
+    held: list[Any] | None = None    # None: the get was refused (``error`` says how)
+    error: FmiError | None = None
+
+
+@dataclass
+class Instantiated:
+    """The snapshot: every variable read, or why none could be (``reason``); ``independent``:
+    the independent variable, which has no start but may be read (MV-13), as time reads there."""
+
+    items: list[Held] = field(default_factory=list)
+    reason: str = ""
+    independent: list[Held] = field(default_factory=list)
+
+    def by_vr(self) -> dict[int, Held]:
+        return {h.var.vr: h for h in self.items if h.var.vr is not None}
+
+
+def element_count(model: ModelDescription, var: Variable) -> int | None:
+    """Element count of ``var`` from its ``<Dimension>`` elements, or None when not fixed."""
+    count = 1
+    for dim in var.dimensions:
+        text = dim.start
+        if text is None and dim.vr is not None:
+            target = model.by_vr.get(dim.vr)
+            text = target.start if target is not None else None
+        try:
+            size = int((text or "").strip())
+        except ValueError:
+            return None
+        if size < 0:
+            return None
+        count *= size
+    return count
+
+
+def _parse(type_: str, token: str) -> Any:
+    """One XML start token as the value fmi3Get<type> returns, or None if it is not one."""
+    if type_ in ("Float32", "Float64"):
+        try:
+            value = float(token)
+        except ValueError:
+            return None
+        return value if math.isfinite(value) else None
+    if type_ == "Boolean":
+        return _BOOLEANS.get(token.strip())
+    if type_ == "String":
+        return token
+    try:
+        return int(token)
+    except ValueError:
+        return None
+
+
+def expected_starts(model: ModelDescription, var: Variable) -> list[Any] | None:
+    """The values ``var`` must hold after instantiation, one per element, or None when it has
+    none to hold or the XML does not say them clearly (a static finding's business)."""
+    if (var.vr is None or var.start is None or var.initial not in ("exact", "approx")
+            or var.type not in GETTERS):
+        return None
+    size = element_count(model, var)
+    if not size:
+        return None
+    if var.type == "String":
+        return [var.start] if size == 1 and not var.dimensions else None
+    tokens = var.start.split()
+    if len(tokens) not in (1, size):
+        return None
+    values = [_parse(var.type, t) for t in tokens]
+    if any(v is None for v in values):
+        return None
+    return values * size if len(values) == 1 else values
+
+
+def instantiated_values(ctx: ProbeContext) -> Instantiated:
+    """The snapshot, taken once per worker (memoised in ``ctx.facts``)."""
+    memo = ctx.facts.get(FACT)
+    if isinstance(memo, Instantiated):
+        return memo
+    result = _take(ctx)
+    ctx.facts[FACT] = result
+    return result
+
+
+def _take(ctx: ProbeContext) -> Instantiated:
+    model = ctx.model
+    library = ctx.facts.get("library")
+    if model is None or library is None:
+        return Instantiated(reason="the binary is not loaded")
+    items = []
+    for var in model.variables:
+        start = expected_starts(model, var)
+        if start is not None:
+            items.append(Held(var, start))
+    if not items:
+        return Instantiated(reason="no variable has a start value the instance must hold")
+    try:
+        inst = new_instance(library, "instantiated")
+    except FmiError as exc:
+        return Instantiated(reason=f"{exc.call} returned {exc.status}: nothing to read")
+    independent = [Held(v, [math.nan]) for v in model.variables if v.vr is not None and
+                   v.causality == "independent" and v.type in ("Float32", "Float64") and
+                   not v.dimensions]
+    try:
+        read_held(inst, items)
+        read_held(inst, independent)
+    finally:
+        inst.free()
+    return Instantiated(items, independent=independent)
+
+
+def read_held(inst: Any, items: list[Held]) -> None:
+    """Scalars of one type in one call, each array in a call of its own. A refused call
+    leaves its variables unread (``error``): FMI 3.0 allows fmi3Get* in Instantiated (SG-01),
+    but a refusal is not a value the instance holds, so nothing is compared for them."""
+    scalars: dict[str, list[Held]] = {}
+    for h in items:
+        if len(h.start) == 1 and not h.var.dimensions:
+            scalars.setdefault(h.var.type, []).append(h)
+        else:
+            _get(inst, h.var.type, [h])
+    for type_, group in scalars.items():
+        _get(inst, type_, group)
+
+
+def _get(inst: Any, type_: str, group: list[Held]) -> None:
+    try:
+        values = inst.get_typed(type_, [h.var.vr for h in group],
+                                sum(len(h.start) for h in group))
+    except FmiError as exc:
+        for h in group:
+            h.error = exc
+        return
+    k = 0
+    for h in group:
+        h.held = values[k:k + len(h.start)]
+        k += len(h.start)

@@ -37,7 +37,8 @@ from .deaths import CRASHED, MEMORY, NOT_LOADABLE, TIMED_OUT, CallClock, Diagnos
 from .job import ENTRY, ProbeJob
 
 RUNNER_RULES = (CRASHED, TIMED_OUT, MEMORY, NOT_LOADABLE)
-PACKAGE_ROOT = str(Path(__file__).resolve().parents[2])
+# The folder that holds conformance/ (one parent per dot of this module's name).
+PACKAGE_ROOT = str(Path(__file__).resolve().parents[__name__.count(".")])
 
 log = logging.getLogger(__name__)
 

@@ -11,17 +11,6 @@ from .ruledocs import render_markdown, rule_home
 
 FIX_MARKS = {"safe": "fix", "unsafe": "fix?", None: ""}   # the column of `lsdae rules`
 
-#: What the word a severity rests on says (catalogue.FORCE_SEVERITY maps it to the severity).
-FORCE_MEANING = {
-    "must": "the spec requires it", "shall": "the spec requires it",
-    "should": "the spec recommends it", "may": "the spec allows it",
-    "advice": "advice, not a requirement of the spec",
-    "open": "the spec is silent or its question is open",
-    "interop": "the spec is silent or open, but named importers reject or misread it",
-    "lsdae": "no word of the spec: lsdae could not read or check the FMU",
-}
-
-
 def _rule_line(rule: RuleSpec) -> str:
     return (f"{rule.code}  {rule.name:<40} {rule.severity!s:<8} "
             f"{FIX_MARKS[rule.fix_kind]:<4} {rule.summary}")
@@ -44,9 +33,11 @@ def explain_text(rule: RuleSpec) -> str:
         "", rule.summary, "",
         f"Applies to: {drafts}",
         f"Spec:       {rule.spec}",
-        f"Force:      {rule.force}, {rule.force_spec}: {FORCE_MEANING[rule.force]}, "
-        f"hence {rule.severity}",
+        f"Basis:      {rule.basis.describe()}, hence {rule.severity}" if rule.basis else
+        f"Basis:      none recorded, {rule.severity}",
     ]
+    parts += [f"  part {b.part} ({b.what}): {b.describe()}, hence {b.severity}"
+              for b in rule.parts]
     parts.append(f"Fix:        {rule.fix or 'none: `lsdae fix` leaves this finding'}")
     if rule.aliases:
         parts.append(f"Aliases:    {', '.join(rule.aliases)}")

@@ -60,10 +60,14 @@ HEADER = """# lsdae rules
 Generated from `rules/*.toml` by `lsdae rules --format markdown > docs/rules.md`; do not edit.
 `lsdae explain CODE` shows the same text in a terminal.
 
-Each rule's severity rests on a word (*force*) and the digest id it comes from: must or shall
-give an error, should a warning, may, advice or an open question information; `interop` (the
-spec is silent or open, but named importers reject or misread it) a warning, and `lsdae` (lsdae
-could not read or check the FMU) an error.
+Each rule's severity follows from its *basis*, the kind of text its verdict rests on, read in
+the originals (FMI 3.0.2, fmi-ls-dae 1.0.0-alpha.1 and its schema, the 2026 paper) and quoted
+with its section: `must` (MUST, SHALL or REQUIRED in normative text), `definition` (normative
+declarative text the FMU contradicts) and `contradiction` (the FMU contradicts itself) give an
+error; `should` (SHOULD, RECOMMENDED) and `interop` (named importers reject or misread it) a
+warning; `advice` (a note, a remark or no text) information; `limit` (lsdae's own limits) a
+warning that never calls the FMU non-conformant. A sub-check whose basis differs is a *part*
+with its own basis and severity.
 """
 
 
@@ -80,11 +84,16 @@ def _section(rule: RuleSpec) -> str:
     lines = [
         f"## {rule.code} `{rule.name}`",
         "",
-        f"**{rule.severity}** ({rule.force}: {rule.force_spec}) · stage {rule.stage} · "
+        f"**{rule.severity}** ({rule.basis.kind if rule.basis else 'no basis'}) · "
+        f"stage {rule.stage} · "
         f"{_drafts(rule)} · spec: {rule.spec}",
         "",
         rule.summary,
         "",
+        *([f"Basis: {rule.basis.describe()}", ""] if rule.basis else []),
+        *[f"- part `{b.part}` ({b.what}): **{b.severity}**, {b.describe()}"
+          for b in rule.parts],
+        *([""] if rule.parts else []),
         rule.rationale,
         "",
         "Fails:",
@@ -109,10 +118,11 @@ def _section(rule: RuleSpec) -> str:
 
 
 def render_markdown(catalogue: Catalogue) -> str:
-    table = ["| code | name | severity | force | stage | summary |",
+    table = ["| code | name | severity | basis | stage | summary |",
              "|---|---|---|---|---|---|"]
     table += [f"| [{r.code}](#{r.code.lower()}-{r.name}) | `{r.name}` | {r.severity} | "
-              f"{r.force} | {r.stage} | {r.summary} |" for r in catalogue]
+              f"{r.basis.kind if r.basis else ''} | {r.stage} | {r.summary} |"
+              for r in catalogue]
     drafts = ["| draft id | shape |", "|---|---|"]
     drafts += [f"| `{k}` | {v} |" for k, v in DRAFT_LABELS.items()]
     body = "\n\n".join(_section(r) for r in catalogue)

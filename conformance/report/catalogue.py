@@ -1,7 +1,8 @@
 """Load the rule catalogue (``rules/*.toml``) into :class:`RuleSpec` objects.
 
-The catalogue is the single source of truth for codes, names, default severities, the drafts a
-rule applies to, spec references, docs and options. Nothing else in the code base states them.
+The catalogue is the single source of truth for codes, names, the basis of each verdict and the
+severity it gives, the drafts a rule applies to, spec references, docs and options. Nothing
+else in the code base states them.
 """
 from __future__ import annotations
 
@@ -22,20 +23,70 @@ else:  # pragma: no cover - exercised on 3.10 only
 STAGES = ("archive", "xml", "schema", "static", "probe", "simulation")
 NEEDS = ("model-description", "manifest", "dae-layer", "binary")
 FIX_KINDS = ("safe:", "unsafe:", "none:")
-REQUIRED = ("code", "name", "severity", "force", "force_spec", "stage", "drafts", "spec",
-            "summary", "rationale", "bad", "good")
+REQUIRED = ("code", "name", "basis", "stage", "drafts", "spec", "summary", "rationale", "bad",
+            "good")
 
-#: The word of the spec a rule's severity rests on, and the severity it gives (RFC 2119's
-#: reading, as the FMI text uses it). Two words are not the spec's: ``interop`` (the spec is
-#: silent or open, but named importers reject or misread what the FMU does: a warning) and
-#: ``lsdae`` (lsdae itself could not read or check the FMU: an error, so that an unchecked FMU
-#: never passes). ``force_spec`` gives the digest id(s) the word comes from.
-FORCE_SEVERITY: dict[str, Severity] = {
-    "must": Severity.ERROR, "shall": Severity.ERROR, "lsdae": Severity.ERROR,
-    "should": Severity.WARNING, "interop": Severity.WARNING,
-    "may": Severity.INFO, "advice": Severity.INFO, "open": Severity.INFO,
+#: What a verdict rests on, and the severity it gives; the one place severity is decided.
+#: ``must``: MUST, SHALL or REQUIRED in normative text; ``definition``: normative declarative
+#: text the FMU contradicts; ``contradiction``: the FMU contradicts itself (two declarations, a
+#: declaration and its binary, its two modes at one point); ``should``: SHOULD or RECOMMENDED;
+#: ``interop``: what named importers do with it; ``advice``: a note, a bracketed remark or no
+#: text (our recommendation, or a call the importer must not make: robustness); ``limit``:
+#: lsdae's own limits (time, memory, size), a warning that names the limit and never calls the
+#: FMU non-conformant.
+BASIS_SEVERITY: dict[str, Severity] = {
+    "must": Severity.ERROR, "definition": Severity.ERROR, "contradiction": Severity.ERROR,
+    "should": Severity.WARNING, "interop": Severity.WARNING, "limit": Severity.WARNING,
+    "advice": Severity.INFO,
 }
 
+#: What each kind says, for the rule docs, ``lsdae explain``, SARIF's help and the HTML report.
+BASIS_MEANING: dict[str, str] = {
+    "must": "the text requires it",
+    "definition": "the text defines it so, and the FMU contradicts the definition",
+    "contradiction": "the FMU contradicts itself",
+    "should": "the text recommends it",
+    "interop": "named importers reject or misread it",
+    "advice": "a note, a remark or no text: a recommendation, not a requirement",
+    "limit": "lsdae's own limit, not a verdict on the FMU",
+}
+
+#: The documents a basis may name: the originals (by version), the importers, lsdae itself
+#: (a limit), or none (advice with no text).
+DOCUMENTS = ("FMI 3.0.2", "fmi-ls-dae 1.0.0-alpha.1", "fmi-ls-dae 1.0.0-alpha.1 schema",
+             "paper 2026", "importers", "lsdae", "none")
+
+#: The words a basis of kind must or should quotes (RFC 2119, as the FMI text uses them).
+KEYWORDS = {"must": ("must", "shall", "required", "has to"),
+            "should": ("should", "recommended")}
+
+
+@dataclass(frozen=True, slots=True)
+class Basis:
+    """What one verdict rests on: its kind, and where the text is (document and version,
+    section, the words as written). A rule has one; a sub-check whose basis differs has its
+    own, named by ``part`` (the id a check sets on its violations) and described by ``what``."""
+
+    kind: str
+    document: str
+    section: str
+    word: str
+    part: str = ""
+    what: str = ""
+
+    @property
+    def severity(self) -> Severity:
+        return BASIS_SEVERITY[self.kind]
+
+    def describe(self) -> str:
+        """The kind, what it means, and where the text is: one line for docs and reporters."""
+        return f"{self.kind} ({BASIS_MEANING[self.kind]}); {self.cite()}"
+
+    def cite(self) -> str:
+        """One line: the document, the section and the words, as far as there are any."""
+        where = ", ".join(x for x in (self.document if self.document != "none" else "",
+                                      self.section) if x)
+        return f"{where}: \u201c{self.word}\u201d" if where else self.word
 
 class CatalogueError(Exception):
     """The catalogue itself is inconsistent (a defect of ours, caught by the tests)."""
@@ -58,8 +109,20 @@ class RuleSpec:
     options: tuple[tuple[str, Any], ...] = ()
     source: str = ""
     fix: str | None = None      # "safe: how", "unsafe: how" or "none: why no fix can exist"
-    force: str = ""             # the spec's word the severity rests on (FORCE_SEVERITY)
-    force_spec: str = ""        # the digest id(s) the word comes from
+    basis: Basis | None = None  # what the verdict rests on; severity is basis.severity
+    parts: tuple[Basis, ...] = ()   # sub-checks whose basis differs, by Basis.part
+
+    def part(self, name: str | None) -> Basis | None:
+        """The basis of sub-check ``name`` (None or unknown: the rule's own)."""
+        for basis in self.parts:
+            if basis.part == name:
+                return basis
+        return self.basis
+
+    def severity_of(self, part: str | None) -> Severity:
+        """The severity of a violation of sub-check ``part`` (None: the rule's)."""
+        basis = self.part(part) if part else None
+        return basis.severity if basis is not None else self.severity
 
     @property
     def fix_kind(self) -> str | None:
@@ -126,28 +189,63 @@ def _rule(table: Mapping[str, Any], source: str) -> RuleSpec:
     for need in needs:
         if need not in NEEDS:
             raise CatalogueError(f"{source}: rule {table['code']} has unknown need {need!r}")
-    force = table["force"]
-    if force not in FORCE_SEVERITY:
-        raise CatalogueError(f"{source}: rule {table['code']} has force {force!r}; use one of "
-                             f"{', '.join(FORCE_SEVERITY)}")
-    if Severity.parse(table["severity"]) != FORCE_SEVERITY[force]:
-        raise CatalogueError(f"{source}: rule {table['code']} is {table['severity']}, but its "
-                             f"force {force!r} makes it {FORCE_SEVERITY[force]}")
+    for old in ("severity", "force", "force_spec"):
+        if old in table:
+            raise CatalogueError(f"{source}: rule {table['code']} sets {old!r}; the severity "
+                                 "follows from [rule.basis] kind alone")
+    basis = _basis(table["basis"], f"{source}: rule {table['code']}")
+    parts = tuple(_basis(part, f"{source}: rule {table['code']} part", part=True)
+                  for part in table.get("parts", ()))
+    if len({p.part for p in parts}) != len(parts):
+        raise CatalogueError(f"{source}: rule {table['code']} names a part twice")
     fix = table.get("fix")
     if fix is not None and (not isinstance(fix, str)
                             or not fix.startswith(FIX_KINDS) or not fix.split(":", 1)[1].strip()):
         raise CatalogueError(f"{source}: rule {table['code']} has fix {fix!r}; write "
                              '"safe: how", "unsafe: how" or "none: why"')
     return RuleSpec(
-        code=table["code"], name=table["name"], severity=Severity.parse(table["severity"]),
+        code=table["code"], name=table["name"], severity=basis.severity,
         stage=stage, drafts=tuple(table["drafts"]), needs=needs, spec=table["spec"],
         summary=table["summary"].strip(), rationale=table["rationale"].strip(),
         bad=table["bad"].strip("\n"), good=table["good"].strip("\n"),
         aliases=tuple(table.get("aliases", ())),
         options=tuple(sorted(table.get("options", {}).items())), source=source,
         fix=" ".join(fix.split()) if fix else None,
-        force=force, force_spec=" ".join(str(table["force_spec"]).split()),
+        basis=basis, parts=parts,
     )
+
+
+def _basis(table: Mapping[str, Any], where: str, *, part: bool = False) -> Basis:
+    """A ``[rule.basis]`` or ``[[rule.parts]]`` table, refused when it lacks a kind, a
+    location, or (must, should) the keyword it rests on."""
+    if not isinstance(table, Mapping):
+        raise CatalogueError(f"{where}: basis must be a table")
+    fields = ("kind", "document", "section", "word") + (("part", "what") if part else ())
+    missing = [k for k in fields if not isinstance(table.get(k), str)]
+    unknown = set(table) - set(fields)
+    if missing or unknown:
+        raise CatalogueError(f"{where}: basis lacks {', '.join(missing) or '-'}"
+                             f"{'; unknown ' + ', '.join(sorted(unknown)) if unknown else ''}")
+    basis = Basis(**{k: " ".join(table[k].split()) for k in fields})
+    if basis.kind not in BASIS_SEVERITY:
+        raise CatalogueError(f"{where}: basis kind {basis.kind!r}; use one of "
+                             f"{', '.join(BASIS_SEVERITY)}")
+    if basis.document not in DOCUMENTS:
+        raise CatalogueError(f"{where}: basis document {basis.document!r}; use one of "
+                             f"{', '.join(DOCUMENTS)}")
+    if not basis.word:
+        raise CatalogueError(f"{where}: basis gives no word (the text as written, or why none)")
+    original = basis.document not in ("importers", "lsdae", "none")
+    if basis.kind in ("must", "should", "definition") and not (original and basis.section):
+        raise CatalogueError(f"{where}: a {basis.kind} basis names the original's section")
+    if basis.kind in KEYWORDS and not any(w in basis.word.lower() for w in KEYWORDS[basis.kind]):
+        raise CatalogueError(f"{where}: a {basis.kind} basis quotes its keyword "
+                             f"({' or '.join(KEYWORDS[basis.kind])}); it reads {basis.word!r}")
+    if basis.kind == "interop" and basis.document != "importers":
+        raise CatalogueError(f"{where}: an interop basis names the importers")
+    if basis.kind == "limit" and basis.document != "lsdae":
+        raise CatalogueError(f"{where}: a limit is lsdae's own (document \"lsdae\")")
+    return basis
 
 
 def load_catalogue(directory: Path | None = None) -> Catalogue:

@@ -80,7 +80,9 @@ class Violation:
     many violations share the message, with a count and the first few subjects.
     ``subject`` is the stable identity of what is wrong (usually a variable name); baselines key on it.
     ``rule`` is set only by loaders and stages that emit several pseudo-rules (archive, XML,
-    schema); ordinary checks leave it empty and the engine knows which rule it ran.
+    schema); ordinary checks leave it empty and the engine knows which rule it ran. ``part``
+    names the sub-check of the rule whose basis (and so severity) differs from the rule's own
+    (``[[rule.parts]]`` in the catalogue); None is the rule's own verdict.
     """
 
     message: str
@@ -88,6 +90,7 @@ class Violation:
     evidence: Evidence = ()
     subject: str | None = None
     rule: str | None = None
+    part: str | None = None
 
     @property
     def text(self) -> str:
@@ -107,6 +110,7 @@ class Finding:
     evidence: Evidence = ()
     subject: str | None = None
     count: int = 1
+    part: str | None = None     # the sub-check whose basis gave the severity (catalogue parts)
 
     def sort_key(self) -> tuple[str, int, int, str, str]:
         f, line, col = self.location.sort_key()

@@ -74,7 +74,8 @@ def read_finding(data: Any) -> Finding:
         severity=Severity.parse(_str(data["severity"], "severity")),
         message=_str(data["message"], "message"), location=location,
         evidence=evidence(_restore(_dict(ev, "evidence"))) if ev else (),
-        subject=data["subject"], count=int(data["count"]))
+        subject=data["subject"], count=int(data["count"]),
+        part=_str(data["part"], "part") if data.get("part") is not None else None)
 
 
 def _restore(value: Any) -> Any:

@@ -208,6 +208,7 @@ def _finding(f: Finding, catalogue: Catalogue | None) -> str:
     rule = catalogue.get(f.code) if catalogue is not None else None
     if rule is not None:
         out.append(f"<details><summary>Rule: {escape(rule.summary)}</summary>"
+                   f"<p><b>Basis:</b> {escape(_basis(rule, f.part))}</p>"
                    f"<p><b>Spec:</b> {escape(rule.spec)}</p><p>{escape(rule.rationale)}</p>"
                    f"<p><b>Fix:</b> see <code>lsdae explain {escape(rule.code)}</code></p>"
                    "</details>")
@@ -252,6 +253,12 @@ def _plot(draw) -> str:
         return _no_plot(f"The probe data could not be plotted: {type(exc).__name__}: {exc}")
     return (f'<figure><img src="{plot.uri}" alt="{escape(plot.alt)}">'
             f"<figcaption>{escape(plot.caption)}</figcaption></figure>")
+
+
+def _basis(rule: Any, part: str | None) -> str:
+    """What this finding's verdict rests on: its part's basis, else the rule's."""
+    basis = rule.part(part)
+    return f"{basis.describe()} ({basis.severity})" if basis else "none recorded"
 
 
 def _rules_run(fmu: FmuReport) -> str:

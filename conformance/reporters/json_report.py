@@ -39,6 +39,8 @@ def finding_dict(f: Finding, catalogue: Catalogue | None = None, *,
         "subject": f.subject, "count": f.count, "evidence": plain(f.evidence),
         "fix": rule.fix_kind if rule is not None else None,
     }
+    if f.part is not None:   # a sub-check whose basis differs from the rule's (its severity)
+        out["part"] = f.part
     if snippet:
         out["snippet"] = loc.snippet
     return out

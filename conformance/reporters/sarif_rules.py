@@ -38,9 +38,17 @@ def _fence(text: str) -> str:
     return f"```{lang}\n{text}\n```"
 
 
+def _basis_lines(rule: RuleSpec) -> list[str]:
+    """What the verdict rests on: the rule's basis and each part's, one line each."""
+    lines = [f"Basis: {rule.basis.describe()}"] if rule.basis else []
+    lines += [f"Part {b.part} ({b.what}, {b.severity}): {b.describe()}" for b in rule.parts]
+    return lines
+
+
 def _help_text(rule: RuleSpec, url: str) -> str:
     return "\n".join([
         rule.summary, "", rule.rationale, "",
+        *_basis_lines(rule),
         f"Spec: {rule.spec}", f"Applies to drafts: {', '.join(rule.drafts)}", "",
         "Fails:", rule.bad, "", "Passes:", rule.good, "", f"Documentation: {url}",
     ])
@@ -51,6 +59,7 @@ def _help_markdown(rule: RuleSpec, url: str) -> str:
     return "\n".join([
         f"**{rule.code} `{rule.name}`** ({rule.severity}, {rule.stage} stage)", "",
         rule.summary, "", rule.rationale, "",
+        *[f"**{line.split(':', 1)[0]}:**{line.split(':', 1)[1]}  " for line in _basis_lines(rule)],
         f"**Spec:** {rule.spec}  ", f"**Applies to:** {drafts}", "",
         "Fails:", "", _fence(rule.bad), "", "Passes:", "", _fence(rule.good), "",
         f"[Full documentation]({url})",
@@ -72,6 +81,7 @@ def _descriptor(rule: RuleSpec, docs_url: str) -> dict[str, Any]:
             "precision": "high" if rule.stage in ("probe", "simulation") else "very-high",
             "problem.severity": _PROBLEM_SEVERITY[rule.severity],
             "spec": rule.spec,
+            "basis": rule.basis.kind if rule.basis else None,
             "drafts": list(rule.drafts),
         },
     }

@@ -56,9 +56,10 @@ class Collector:
         self.add_stage([replace(violation, rule=rule_name)])
 
     def findings(self) -> tuple[Finding, ...]:
-        groups: dict[tuple[str, str, str], list[tuple[RuleSpec, Violation]]] = {}
+        groups: dict[tuple[str, str | None, str, str], list[tuple[RuleSpec, Violation]]] = {}
         for rule, v in self.items:
-            groups.setdefault((rule.code, v.message, v.location.file or ""), []).append((rule, v))
+            key = (rule.code, v.part, v.message, v.location.file or "")
+            groups.setdefault(key, []).append((rule, v))
         out: list[Finding] = []
         for members in groups.values():
             if len(members) > self.threshold:
@@ -70,8 +71,8 @@ class Collector:
         return tuple(sorted(set(out), key=Finding.sort_key))
 
     def _single(self, rule: RuleSpec, v: Violation) -> Finding:
-        return Finding(rule.code, rule.name, self.selection.severity[rule.code], v.text,
-                       v.location, v.evidence, v.subject)
+        return Finding(rule.code, rule.name, self.selection.severity_of(rule, v.part), v.text,
+                       v.location, v.evidence, v.subject, part=v.part)
 
     def _grouped(self, members: list[tuple[RuleSpec, Violation]]) -> Finding:
         members = sorted(members, key=lambda m: m[1].location.sort_key())
@@ -86,8 +87,8 @@ class Collector:
         ev = first.evidence + evidence(
             count=len(members), subjects=subjects[:20],
             lines=[v.location.line for _, v in members[:20]])
-        return Finding(rule.code, rule.name, self.selection.severity[rule.code], message,
-                       first.location, ev, None, len(members))
+        return Finding(rule.code, rule.name, self.selection.severity_of(rule, first.part),
+                       message, first.location, ev, None, len(members), part=first.part)
 
 
 # The verbs that follow "{subject}" in messages, in the third person singular, and their plural.

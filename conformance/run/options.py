@@ -39,9 +39,18 @@ class RuleSelection:
             selected -= {r.code for r in self._resolve(pattern)}
         self.enabled = frozenset(selected)
         self.severity: dict[str, Severity] = {r.code: r.severity for r in catalogue}
+        self.overridden: set[str] = set()
         for pattern, level in options.severity:
             for rule in self._resolve(pattern):
                 self.severity[rule.code] = Severity.parse(level)
+                self.overridden.add(rule.code)
+
+    def severity_of(self, rule: RuleSpec, part: str | None) -> Severity:
+        """A violation's severity: the user's for the rule when they set one, else the basis of
+        its sub-check (``part``), else the rule's."""
+        if part is None or rule.code in self.overridden:
+            return self.severity[rule.code]
+        return rule.severity_of(part)
 
     def _resolve(self, pattern: str) -> list[RuleSpec]:
         rules = self.catalogue.matching(pattern.strip())

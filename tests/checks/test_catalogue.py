@@ -5,8 +5,8 @@ import re
 
 import pytest
 
-from conformance.report.catalogue import (FORCE_SEVERITY, CatalogueError, default_catalogue,
-                                          load_catalogue)
+from conformance.report.catalogue import (BASIS_SEVERITY, DOCUMENTS, KEYWORDS, CatalogueError,
+                                          default_catalogue, load_catalogue)
 from conformance.report.findings import Severity
 from conformance.checks import REGISTRY
 from conformance.commands.explain import explain_text
@@ -32,55 +32,93 @@ def test_rule_entry_is_complete(rule):
     assert rule.code in explain_text(rule)
 
 
-# Digest ids: AR-01, MV-23, DAE-14, Q-07, D-13, B0, A10, SG-MATRIX ... (see the digest's legend)
-DIGEST_ID = re.compile(r"\b(?:[A-Z]{1,3}-\d{2}|DAE-\d{2}|[QD]-\d{2}|B\d|A\d{1,2}|SG-MATRIX)\b")
-
-
 @pytest.mark.parametrize("rule", RULES, ids=[r.code for r in RULES])
-def test_severity_rests_on_the_spec_word_it_records(rule):
-    """Issue 21.4: must/shall -> error, should -> warning, may/advice/open -> info; interop (no
-    spec word, named importers reject it) -> warning; lsdae (lsdae could not check) -> error.
-    Every entry names the word and the digest id it comes from, and explain shows both."""
-    assert rule.force in FORCE_SEVERITY, rule.force
-    assert rule.severity == FORCE_SEVERITY[rule.force], (rule.code, rule.severity, rule.force)
-    if rule.force == "lsdae":
-        assert rule.force_spec.startswith("none:"), "lsdae rules rest on no spec id: say so"
-    else:  # a digest id, or "none:" and why there is none
-        assert DIGEST_ID.search(rule.force_spec) or (
-            rule.force_spec.startswith("none:") and rule.force in ("interop", "advice", "open")
-        ), (rule.code, rule.force_spec)
-    if rule.force == "interop":   # the importers, or how importers differ, are named
-        assert re.search(r"importer|fmi-rs|fmusim|solver", rule.force_spec + rule.rationale)
+def test_every_verdict_records_its_basis_and_its_severity_follows_from_it(rule):
+    """Issue 29.1: every rule, and every sub-check whose basis differs (a part), records the kind
+    of text its verdict rests on and where that text is (document and version, section, the
+    words as written); the severity is the kind's, never set by hand; explain shows it all."""
+    assert rule.basis is not None, f"{rule.code} records no basis"
     text = explain_text(rule)
-    assert f"Force:      {rule.force}, {rule.force_spec}" in text
+    for basis in (rule.basis, *rule.parts):
+        assert basis.kind in BASIS_SEVERITY and basis.document in DOCUMENTS, basis
+        assert basis.word, f"{rule.code}: a basis quotes the text, or says why there is none"
+        if basis.kind in ("must", "should", "definition"):   # normative text of an original
+            assert basis.document not in ("importers", "lsdae", "none") and basis.section
+        if basis.kind in KEYWORDS:
+            assert any(w in basis.word.lower() for w in KEYWORDS[basis.kind]), basis.word
+        if basis.kind == "advice" and basis.document == "none":
+            assert basis.word.startswith("no text"), basis.word
+        assert basis.describe() in text
+    assert rule.severity == BASIS_SEVERITY[rule.basis.kind]
+    assert all(p.part and p.what for p in rule.parts)
+    assert f"Basis:      {rule.basis.describe()}, hence {rule.severity}" in text
 
 
-def test_the_force_words_cover_every_severity():
-    assert set(FORCE_SEVERITY.values()) == set(Severity)
-    assert {w for w, s in FORCE_SEVERITY.items() if s == Severity.ERROR} >= {"must", "shall"}
-    assert FORCE_SEVERITY["should"] == Severity.WARNING
-    assert {FORCE_SEVERITY[w] for w in ("may", "advice", "open")} == {Severity.INFO}
+def test_the_kinds_cover_every_severity():
+    assert set(BASIS_SEVERITY.values()) == set(Severity)
+    assert {k for k, s in BASIS_SEVERITY.items() if s == Severity.ERROR} == {
+        "must", "definition", "contradiction"}
+    assert {k for k, s in BASIS_SEVERITY.items() if s == Severity.WARNING} == {
+        "should", "interop", "limit"}
+    assert {k for k, s in BASIS_SEVERITY.items() if s == Severity.INFO} == {"advice"}
+
+
+_BASIS = re.compile(r'(?ms)^\[rule\.basis\]\nkind = "must"\ndocument = "[^"]*"\nsection = "[^"]*"\n'
+                    r'word = "[^"]*"\n')
 
 
 @pytest.mark.parametrize("edit, words", [
-    (('force = "must"\n', ''), "lacks force"),
-    (('force = "must"\n', 'force = "nice"\n'), "has force 'nice'"),
-    (('severity = "error"\nforce = "must"\n', 'severity = "warning"\nforce = "must"\n'),
-     "makes it error"),
+    (lambda t: t.replace('[rule.basis]\nkind = "must"\n', '[rule.basisx]\nkind = "must"\n', 1),
+     "lacks basis"),
+    (lambda t: t.replace('[rule.basis]\nkind = "must"\n', '[rule.basis]\nkind = "nice"\n', 1),
+     "basis kind 'nice'"),
+    (lambda t: t.replace('code = "DAE701"\n', 'code = "DAE701"\nseverity = "warning"\n', 1),
+     "sets 'severity'"),
+    (lambda t: _BASIS.sub('[rule.basis]\nkind = "must"\ndocument = "FMI 3.0.2"\n'
+                          'section = "2.2"\nword = "it returns fmi3Error"\n', t, count=1),
+     "quotes its keyword"),
+    (lambda t: _BASIS.sub('[rule.basis]\nkind = "must"\ndocument = "FMI 3.0.2"\n'
+                          'section = ""\nword = "it must"\n', t, count=1),
+     "names the original's section"),
+    (lambda t: _BASIS.sub('[rule.basis]\nkind = "limit"\ndocument = "FMI 3.0.2"\n'
+                          'section = ""\nword = "probe_seconds"\n', t, count=1),
+     "lsdae's own"),
 ])
-def test_the_loader_refuses_a_severity_that_is_not_its_word(tmp_path, edit, words):
+def test_the_loader_refuses_a_basis_without_kind_location_or_keyword(tmp_path, edit, words):
     text = (FIXTURES.parents[1] / "rules" / "probes.toml").read_text(encoding="utf-8")
-    assert edit[0] in text
-    (tmp_path / "probes.toml").write_text(text.replace(edit[0], edit[1], 1), encoding="utf-8")
+    changed = edit(text)
+    assert changed != text, "the edit found nothing to change"
+    (tmp_path / "probes.toml").write_text(changed, encoding="utf-8")
     with pytest.raises(CatalogueError, match=words):
         load_catalogue(tmp_path)
 
 
-def test_the_two_known_cases_are_information():
-    assert CATALOGUE["initial-residual-nonzero"].severity == Severity.INFO
-    assert CATALOGUE["initial-residual-nonzero"].force == "may"
-    assert CATALOGUE["directional-derivatives-missing"].force == "advice"
-    assert CATALOGUE["directional-derivatives-missing"].severity == Severity.INFO
+_PART = re.compile(r"""part=["']([a-z0-9-]+)["']""")
+
+
+@pytest.mark.parametrize("rule", [r for r in RULES if r.parts], ids=lambda r: r.code)
+def test_every_part_is_decided_by_its_rules_code(rule):
+    """A part of the catalogue is a sub-check the rule's module tags (``part="id"``), and the
+    module tags no part the catalogue does not know."""
+    from pathlib import Path
+
+    from conformance.commands.ruledocs import rule_home
+
+    source = (Path(__file__).resolve().parents[2] / rule_home(rule)).read_text("utf-8")
+    tagged = set(_PART.findall(source))
+    assert {p.part for p in rule.parts} <= tagged, (rule.code, tagged)
+
+
+def test_every_part_a_module_tags_is_in_the_catalogue():
+    from pathlib import Path
+
+    from conformance.commands.ruledocs import rule_home
+
+    known = {p.part for r in RULES for p in r.parts}
+    root = Path(__file__).resolve().parents[2]
+    for home in {rule_home(r) for r in RULES}:
+        tagged = set(_PART.findall((root / home).read_text("utf-8")))
+        assert tagged <= known, (home, tagged - known)
 
 
 def test_fixture_exemptions_name_catalogue_rules():

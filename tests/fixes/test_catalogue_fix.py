@@ -25,8 +25,9 @@ def test_the_fixes_in_the_catalogue_are_the_fixers():
 def test_a_fix_entry_names_its_kind():
     table = {k: "x" for k in ("code", "name", "stage", "spec", "summary", "rationale", "bad",
                               "good")}
-    table.update(code="DAE999", severity="error", stage="static", drafts=["*"], force="must",
-                 force_spec="MV-01")
+    table.update(code="DAE999", stage="static", drafts=["*"],
+                 basis={"kind": "must", "document": "FMI 3.0.2", "section": "2.4.7",
+                        "word": "it must"})
     assert _rule({**table, "fix": "safe: do it"}, "t.toml").fix_kind == "safe"
     assert _rule({**table, "fix": "unsafe: observed"}, "t.toml").fix_kind == "unsafe"
     assert _rule(table, "t.toml").fix_kind is None

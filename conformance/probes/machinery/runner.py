@@ -270,5 +270,5 @@ def fold_consequences(outcome: ProbeOutcome) -> None:
             f"{', '.join(sorted(listed))} vanish with every instance alone (a copy of the "
             "binary of its own): consequences of this one, listed in its evidence"),
         evidence=cause.evidence + evidence(consequences=[
-            {"rule": rule, "subject": v.subject, "message": v.message}
+            {"rule": rule, "subject": v.subject, "message": v.text}
             for rule, v in outcome.consequences])))

@@ -18,6 +18,7 @@ from itertools import repeat
 from operator import attrgetter, is_not
 
 from .context import Check, CheckContext
+from .dae_roles import roles_of
 from ..report.findings import Location, Violation, evidence
 from ..model.manifest import Manifest, VrRef
 from ..model.description import FLOAT_TYPES, ModelDescription, Variable
@@ -40,6 +41,8 @@ log = logging.getLogger(__name__)
 # (MV-10), so they are reported here and not as "not continuous".
 KNOWN_CAUSALITIES = frozenset({"input", "parameter", "structuralParameter",
                                "calculatedParameter", "independent"})
+# Of these, the ones that are not p of alpha.1 §2.2 (part structural-or-calculated-parameter).
+NOT_P_PARAMETERS = frozenset({"structuralParameter", "calculatedParameter"})
 
 # The classification order; each rule fires only for its own class.
 NOT_FLOAT = "not-float"
@@ -162,14 +165,16 @@ def algebraic_unknown_vr(ctx: CheckContext) -> Iterator[Violation]:
             yield Violation(
                 "an AlgebraicVariable has no valueReference attribute; give the valueReference "
                 "of the variable the importer solves for",
-                _at_ref(ctx, ref), evidence(value_reference=None, reason="missing"))
+                _at_ref(ctx, ref), evidence(value_reference=None, reason="missing"),
+                part="missing-or-not-integer")
             continue
         text = ref.raw if ref.vr is None else str(ref.vr)
         reason = "not an unsigned integer" if ref.vr is None else "no such variable"
         yield Violation(
             "AlgebraicVariable valueReference {subject} names no variable of "
             "modelDescription.xml; use the valueReference of an existing Float64 variable",
-            _at_ref(ctx, ref), evidence(value_reference=text, reason=reason), subject=text)
+            _at_ref(ctx, ref), evidence(value_reference=text, reason=reason), subject=text,
+            part="missing-or-not-integer" if ref.vr is None else None)
 
 
 def algebraic_duplicate(ctx: CheckContext) -> Iterator[Violation]:
@@ -205,14 +210,23 @@ def algebraic_not_continuous(ctx: CheckContext) -> Iterator[Violation]:
 
 
 def algebraic_is_state_or_derivative(ctx: CheckContext) -> Iterator[Violation]:
-    """DAE-21: an algebraic variable is neither a continuous state nor a derivative."""
+    """DAE-21: an algebraic variable is neither a continuous state nor a derivative.
+
+    The rule's own case is a state or derivative of DAE mode (:class:`.dae_roles.DaeRoles`:
+    the manifest's ContinuousStateDerivative list, or modelDescription's when it lists none);
+    a state of ODE mode only, or a derivative only by its derivative attribute, is the part
+    not-a-dae-mode-state-or-derivative."""
     for ref, var in _classified(ctx, STATE):
         role = "state derivative" if var.derivative is not None else "continuous state"
+        roles = roles_of(ctx)
+        dae_mode = var.vr in roles.states or (var.derivative is not None
+                                              and var.vr in roles.derivatives)
         yield Violation(
             "algebraic variable {subject} is a continuous state or a state derivative, which "
             "the integrator owns; list only variables that the residuals determine",
             _at_ref(ctx, ref), evidence(facts(var, ref), role=role,
-                                        derivative_of=var.derivative), subject=var.name)
+                                        derivative_of=var.derivative), subject=var.name,
+            part="not-a-dae-mode-state-or-derivative" if not dae_mode else None)
 
 
 def algebraic_is_input_or_parameter(ctx: CheckContext) -> Iterator[Violation]:
@@ -222,7 +236,9 @@ def algebraic_is_input_or_parameter(ctx: CheckContext) -> Iterator[Violation]:
             "algebraic variable {subject} is an input, a parameter or the independent "
             "variable, a known that the environment provides; list only local or output "
             "variables that the residuals determine",
-            _at_ref(ctx, ref), evidence(facts(var, ref)), subject=var.name)
+            _at_ref(ctx, ref), evidence(facts(var, ref)), subject=var.name,
+            part="structural-or-calculated-parameter" if var.causality in NOT_P_PARAMETERS
+            else None)
 
 
 def algebraic_is_residual(ctx: CheckContext) -> Iterator[Violation]:

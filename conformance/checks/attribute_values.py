@@ -63,13 +63,21 @@ def _any_problem(floats: list[Variable], details: Iterable[VariableDetails]) -> 
 def _violations(ctx: CheckContext, rule: str) -> Iterator[Violation]:
     if (model := ctx.model) is None:
         return
-    for var, problem in ctx.memo("attribute-problems", lambda: _problems(model)).get(rule, ()):
+    found = ctx.memo("attribute-problems", lambda: _problems(model)).get(rule, ())
+    # DAE521: a variable no derivative attribute names is no continuous state (it has no
+    # fmi3GetNominalsOfContinuousStates value): part "not-a-state"
+    states: set[int | None] = set()
+    if found and rule == NOMINAL_NOT_POSITIVE:
+        states.update(v.derivative for v in analyse(model).derivatives)
+    for var, problem in found:
         shown = "min > max" if rule == MIN_ABOVE_MAX else problem.attribute
         yield Violation(
             f"{{subject}}: {shown} = {problem.text!r}; {_ADVICE[rule]}",
             var_loc(model, var),
             evidence(attribute=problem.attribute, value=problem.text, type=var.type),
-            subject=var.name)
+            subject=var.name,
+            part="not-a-state" if rule == NOMINAL_NOT_POSITIVE and var.vr not in states
+            else None)
 
 
 def float_attribute_not_finite(ctx: CheckContext) -> Iterator[Violation]:

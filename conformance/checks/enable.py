@@ -14,6 +14,7 @@ from operator import attrgetter
 from typing import Iterator
 
 from .context import CheckContext
+from ..model.drafts.detect import ALPHA1
 from ..report.findings import Location, Violation, evidence
 from ..model.manifest import VrRef
 from ..model.description import Variable
@@ -74,6 +75,9 @@ def enable_parameter_duplicate(ctx: CheckContext) -> Iterator[Violation]:
     if m is None or len(m.enables) < 2:
         return
     first = m.enables[0]
+    # a pre-alpha.1 manifest: <EnableDAE> and the root attribute enableDAEModeVariable, or
+    # <EnableDAE> repeated
+    legacy = not (m.draft == ALPHA1 or ctx.draft == ALPHA1)
     for ref in m.enables[1:]:
         yield Violation(
             "the manifest names a second enable parameter ({subject}); keep exactly one "
@@ -83,7 +87,7 @@ def enable_parameter_duplicate(ctx: CheckContext) -> Iterator[Violation]:
                      (ref.name or ref.raw), first_element=first.element,
                      first_value_reference=first.vr if first.vr is not None else
                      (first.name or first.raw), count=len(m.enables)),
-            subject=ref.element)
+            subject=ref.element, part="legacy-element-plus-attribute" if legacy else None)
 
 
 def enable_parameter_unknown_vr(ctx: CheckContext) -> Iterator[Violation]:
@@ -98,17 +102,18 @@ def enable_parameter_unknown_vr(ctx: CheckContext) -> Iterator[Violation]:
                 "the enable parameter is given by the name {subject}, which names no variable "
                 "of modelDescription.xml; use <EnableDAEParameter valueReference=\"..\"/>",
                 _at(ctx, ref), evidence(element=ref.element, name=ref.name),
-                subject=ref.name)
+                subject=ref.name, part="legacy-name-reference")
         elif ref.raw is not None:
             yield Violation(
                 "the enable parameter's valueReference {subject} is not a non-negative integer",
                 _at(ctx, ref), evidence(element=ref.element, value_reference=ref.raw),
-                subject=ref.raw)
+                subject=ref.raw, part="missing-or-not-integer")
         elif ref.vr is None:
             yield Violation(
                 "<{subject}> has no valueReference; point it at the Boolean structural parameter "
                 "that switches DAE mode on",
-                _at(ctx, ref), evidence(element=ref.element), subject=ref.element)
+                _at(ctx, ref), evidence(element=ref.element), subject=ref.element,
+                part="missing-or-not-integer")
         else:
             yield Violation(
                 "the enable parameter's valueReference {subject} names no variable of "
@@ -168,7 +173,7 @@ def enable_parameter_start_not_false(ctx: CheckContext) -> Iterator[Violation]:
             text = ("enable parameter {subject} does not start as false, so the FMU would not "
                     "start in ODE mode; set start=\"false\"")
         yield Violation(text, _at_var(ctx, var), evidence(value_reference=var.vr, start=var.start),
-                        subject=var.name)
+                        subject=var.name, part="start-missing" if start is None else None)
 
 
 def enable_parameter_not_scalar(ctx: CheckContext) -> Iterator[Violation]:
@@ -196,7 +201,7 @@ def enable_parameter_not_scalar(ctx: CheckContext) -> Iterator[Violation]:
                 "separate UInt64 structural parameter for array sizes",
                 _at_var(ctx, user, dim.line),
                 evidence(value_reference=var.vr, referenced_by=[v.name for v, _ in users]),
-                subject=var.name)
+                subject=var.name, part="referenced-by-dimension")
 
 
 CHECKS = {

@@ -80,13 +80,21 @@ def _unqualified(m: Manifest, attribute: str) -> Violation | None:
         "the manifest root carries {subject} without the fmi-ls namespace, so it does not count; "
         'write it as fmi-ls:%s with xmlns:fmi-ls="http://fmi-standard.org/fmi-ls-manifest"'
         % attribute,
-        _root(m, attribute), evidence(attribute=attribute, qualified=False), subject=attribute)
+        _root(m, attribute), evidence(attribute=attribute, qualified=False), subject=attribute,
+        part="missing-or-unqualified")
 
 
 def _missing(m: Manifest, attribute: str, expected: str) -> Violation:
     return Violation(
         'the manifest root has no {subject} attribute; add fmi-ls:%s="%s"' % (attribute, expected),
-        _root(m, attribute), evidence(attribute=attribute, expected=expected), subject=attribute)
+        _root(m, attribute), evidence(attribute=attribute, expected=expected), subject=attribute,
+        part="missing-or-unqualified")
+
+
+def _legacy_shape(ctx: CheckContext, m: Manifest) -> bool:
+    """Whether the manifest has a pre-alpha.1 shape, which the alpha.1 XSD's fixed values do not
+    bind."""
+    return not (m.draft == ALPHA1 or ctx.draft == ALPHA1)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -115,11 +123,12 @@ def ls_name_mismatch(ctx: CheckContext) -> Iterator[Violation]:
     if m.ls_name is None:
         yield _unqualified(m, attribute) or _missing(m, attribute, ALPHA1_NAME)
     elif m.ls_name != ALPHA1_NAME:
+        legacy = _legacy_shape(ctx, m)
         yield Violation(
             'the manifest\'s {subject} is not "%s"; importers recognise the layered standard '
             "by this exact reverse-DNS name" % ALPHA1_NAME,
             _root(m, attribute), evidence(expected=ALPHA1_NAME, actual=m.ls_name),
-            subject=attribute)
+            subject=attribute, part="legacy-shape-name" if legacy else None)
 
 
 def ls_version_invalid(ctx: CheckContext) -> Iterator[Violation]:
@@ -139,7 +148,7 @@ def ls_version_invalid(ctx: CheckContext) -> Iterator[Violation]:
             'the manifest\'s {subject} is empty; set it to "%s"' % ALPHA1_VERSION,
             loc, evidence(actual=version, expected=ALPHA1_VERSION), subject=attribute)
         return
-    if m.draft == ALPHA1 or ctx.draft == ALPHA1:
+    if not _legacy_shape(ctx, m):
         key = _semver_key(version)
         older = _is_older_than_alpha1(version)
         if older:
@@ -159,7 +168,7 @@ def ls_version_invalid(ctx: CheckContext) -> Iterator[Violation]:
             "the manifest's {subject} is not a version number (MAJOR.MINOR.PATCH); "
             'the current version is "%s"' % ALPHA1_VERSION,
             loc, evidence(actual=version, expected=ALPHA1_VERSION, reason="not a version"),
-            subject=attribute)
+            subject=attribute, part="legacy-not-version-like")
 
 
 def _description_difference(actual: str) -> str:
@@ -189,12 +198,13 @@ def ls_description_mismatch(ctx: CheckContext) -> Iterator[Violation]:
     if m.ls_description is None:
         yield _unqualified(m, attribute) or _missing(m, attribute, ALPHA1_DESCRIPTION)
     elif m.ls_description != ALPHA1_DESCRIPTION:
+        legacy = _legacy_shape(ctx, m)
         yield Violation(
             'the manifest\'s {subject} differs from the fixed text "%s"' % ALPHA1_DESCRIPTION,
             _root(m, attribute),
             evidence(expected=ALPHA1_DESCRIPTION, actual=m.ls_description,
                      difference=_description_difference(m.ls_description)),
-            subject=attribute)
+            subject=attribute, part="legacy-shape-text" if legacy else None)
 
 
 CHECKS = {

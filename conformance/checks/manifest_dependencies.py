@@ -35,6 +35,9 @@ _IMPLICIT_KNOWNS = ("inputs, continuous states, continuous state derivatives, pa
 _INIT_KNOWNS = ("inputs, variables with initial=\"exact\", algebraic variables and the "
                 "independent variable")
 _CHECKED_KINDS = ("Output", "ContinuousStateDerivative", "InitialUnknown", "Residual")
+# The element kinds of FMI 3.0.2's ModelStructure, whose dependencies FMI defines (§2.4.8)
+_CORE_KINDS = frozenset({"Output", "ContinuousStateDerivative", "ClockedState",
+                         "InitialUnknown", "EventIndicator"})
 
 
 def unknown_name(u: Unknown, model: ModelDescription) -> str:
@@ -76,7 +79,8 @@ def dependency_unknown_vr(ctx: CheckContext) -> Iterator[Violation]:
                     f"the dependencies of {_tag(u)} {{subject}} list valueReference {vr}, which "
                     "names no variable in modelDescription.xml",
                     _loc(u), evidence(element=u.kind, value_reference=vr),
-                    subject=unknown_name(u, model))
+                    subject=unknown_name(u, model),
+                    part="core-element-dependency" if u.kind in _CORE_KINDS else None)
 
 
 # --- dependency-not-allowed-known ------------------------------------------------------------
@@ -90,6 +94,26 @@ def _allowed(kind: str, var: Variable, roles: DaeRoles, draft: str | None) -> bo
     if var.causality == "parameter" or vr in roles.states:
         return True
     return kind == "Residual" and draft in IMPLICIT_DRAFTS and vr in roles.derivatives
+
+
+def _is_discrete_time_state(var: Variable) -> bool:
+    """Whether ``var`` may be one of FMI 3.0.2's discrete-time states x_d ("(internal)
+    discrete-time variables (of any type)", §2.1), which _allowed does not count as knowns: a
+    local variable with variability discrete, or a clocked state (attribute previous)."""
+    return var.variability == "discrete" and (var.causality == "local"
+                                              or var.previous is not None)
+
+
+def _not_allowed(u: Unknown, known: Variable, vr: int, what: str, allowed: str,
+                 model: ModelDescription, *, part: str | None) -> Violation:
+    """The finding of a dependency of ``u`` on ``known`` (value reference ``vr``), which is not
+    one of its knowns."""
+    return Violation(
+        f"{_tag(u)} {{subject}} depends on '{known.name}', {what}; its allowed knowns "
+        f"are {allowed}",
+        _loc(u), evidence(element=u.kind, known=known.name, known_value_reference=vr,
+                          known_is=what, allowed=allowed),
+        subject=unknown_name(u, model), part=part)
 
 
 def _allowed_text(kind: str, draft: str | None) -> str:
@@ -143,12 +167,17 @@ def dependency_not_allowed_known(ctx: CheckContext) -> Iterator[Violation]:
             if u.kind == "InitialUnknown" and known.initial is not None:
                 what += f' with initial="{known.initial}"'
             allowed = _allowed_text(u.kind, ctx.draft)
-            yield Violation(
-                f"{_tag(u)} {{subject}} depends on '{known.name}', {what}; its allowed knowns "
-                f"are {allowed}",
-                _loc(u), evidence(element=u.kind, known=known.name, known_value_reference=vr,
-                                  known_is=what, allowed=allowed),
-                subject=unknown_name(u, model))
+            if u.kind == "InitialUnknown":
+                yield _not_allowed(u, known, vr, what, allowed, model,
+                                   part="initial-unknown-known")
+            elif u.kind == "Residual":
+                yield _not_allowed(u, known, vr, what, allowed, model, part=None)
+            elif _is_discrete_time_state(known):  # an Output or ContinuousStateDerivative
+                yield _not_allowed(u, known, vr, what, allowed, model,
+                                   part="discrete-time-state-known")
+            else:
+                yield _not_allowed(u, known, vr, what, allowed, model,
+                                   part="output-or-derivative-known")
 
 
 # --- dependencies-kind-length / dependencies-kind-invalid ------------------------------------

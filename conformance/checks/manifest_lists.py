@@ -14,17 +14,19 @@ from operator import attrgetter
 from .context import Check, CheckContext
 from ..report.findings import Location, Violation, evidence
 from ..model.description import ModelDescription
+from ..model.manifest import Manifest
 from ..model.unknowns import Unknown
 from .dae_roles import describe, roles_of
 from .model_analysis import analyse
 
 
-def _unresolved(u: Unknown) -> Violation:
-    """A list element whose own valueReference names no variable."""
+def _unresolved(u: Unknown, *, part: str | None = None) -> Violation:
+    """A list element whose own valueReference names no variable (``part``: the catalogue part
+    this is for the calling rule, None for its own case)."""
     return Violation(
         f"<{u.kind}> {{subject}} names no variable in modelDescription.xml",
         _loc(u), evidence(element=u.kind, value_reference=u.vr),
-        subject=f"valueReference {u.vr}" if u.vr is not None else u.path)
+        subject=f"valueReference {u.vr}" if u.vr is not None else u.path, part=part)
 
 
 def _loc(u: Unknown) -> Location:
@@ -38,18 +40,22 @@ def initial_unknown_not_allowed(ctx: CheckContext) -> Iterator[Violation]:
     model, manifest = ctx.model, ctx.manifest
     assert model is not None and manifest is not None
     roles = roles_of(ctx)
+    event_indicators: frozenset[int] | None = None  # of DAE mode; computed at the first finding
     for u in manifest.unknowns("InitialUnknown"):
         var = model.by_vr.get(u.vr) if u.vr is not None else None
         if var is None:
-            yield _unresolved(u)
+            yield _unresolved(u, part="unresolved")
             continue
         if var.vr in roles.algebraic:
             continue
         if var.vr in roles.residuals:
+            not_exact_output = (var.causality == "output" and var.clocks is None
+                                and var.initial in ("approx", "calculated"))
             yield Violation(
                 "residual {subject} is listed as <InitialUnknown>; list the algebraic variable "
                 "it determines instead, not the residual",
-                _loc(u), evidence(element=u.kind, is_residual=True), subject=var.name)
+                _loc(u), evidence(element=u.kind, is_residual=True), subject=var.name,
+                part="output-residual" if not_exact_output else None)
             continue
         not_exact = var.initial in ("approx", "calculated")
         if (var.causality == "calculatedParameter" or var.clocks is not None
@@ -59,12 +65,25 @@ def initial_unknown_not_allowed(ctx: CheckContext) -> Iterator[Violation]:
         what = describe(var, roles)
         if var.initial is not None:
             what += f' with initial="{var.initial}"'
+        if event_indicators is None:
+            event_indicators = _event_indicators(model, manifest)
         yield Violation(
             f"{{subject}} is listed as <InitialUnknown> but is {what}; initial unknowns are "
             "outputs, continuous states and state derivatives with initial=\"approx\" or "
             "\"calculated\", calculated parameters, and algebraic variables",
             _loc(u), evidence(element=u.kind, variable_is=what, causality=var.causality,
-                              initial=var.initial), subject=var.name)
+                              initial=var.initial), subject=var.name,
+            part="event-indicator" if var.vr in event_indicators else None)
+
+
+def _event_indicators(model: ModelDescription, manifest: Manifest) -> frozenset[int]:
+    """Value references of the event indicators of DAE mode: the manifest's EventIndicator
+    list, or modelDescription's when the manifest lists none (as :class:`.dae_roles.DaeRoles`
+    takes the state derivatives)."""
+    listed = manifest.unknowns("EventIndicator") or analyse(model).unknowns("EventIndicator")
+    vrs = set(map(attrgetter("vr"), listed))
+    vrs.discard(None)
+    return frozenset(vrs)
 
 
 # --- state-derivative-mismatch ---------------------------------------------------------------
@@ -82,13 +101,14 @@ def state_derivative_mismatch(ctx: CheckContext) -> Iterator[Violation]:
     for u in listed:
         var = model.by_vr.get(u.vr) if u.vr is not None else None
         if var is None:
-            yield _unresolved(u)
+            yield _unresolved(u, part="unresolved")
             continue
         if var.derivative is None:
             yield Violation(
                 "<ContinuousStateDerivative> {subject} has no derivative attribute, so it names "
                 "no state; add derivative=\"<valueReference of the state>\" to the variable",
-                _loc(u), evidence(element=u.kind, value_reference=var.vr), subject=var.name)
+                _loc(u), evidence(element=u.kind, value_reference=var.vr), subject=var.name,
+                part="no-derivative-attribute")
             continue
         ours.setdefault(var.vr, u)  # type: ignore[arg-type]
     theirs: dict[int, Unknown] = {}

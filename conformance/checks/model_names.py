@@ -80,7 +80,8 @@ def variable_name_invalid(ctx: CheckContext) -> Iterator[Violation]:
             _location(model, var),
             evidence(name=shown_name(name), alias=is_alias, characters=found or ["(empty name)"],
                      variable=shown_name(var.name), value_reference=var.vr),
-            subject=shown_name(name) or f"(empty {'alias' if is_alias else 'variable'} name)")
+            subject=shown_name(name) or f"(empty {'alias' if is_alias else 'variable'} name)",
+            part="empty" if not name else None)
 
 
 def variable_name_not_structured(ctx: CheckContext) -> Iterator[Violation]:

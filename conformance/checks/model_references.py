@@ -16,6 +16,7 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 from operator import attrgetter
+from typing import NamedTuple
 
 from .context import Check, CheckContext
 from ..report.findings import Location, Violation, evidence
@@ -65,18 +66,28 @@ def model_structure_dependencies_kind_length(ctx: CheckContext) -> Iterator[Viol
                 subject=subject)
 
 
-_DIMENSION_MESSAGES = {
-    "both": "<Dimension> with both start and valueReference, in {subject}; give the size one "
-            "way: start for a constant size, valueReference for a size set by a variable",
-    "neither": "<Dimension> with neither start nor valueReference, in {subject}; give the size "
-               "as start=\"n\" or as the valueReference of a UInt64 structural parameter",
-    "zero": "<Dimension> whose initial size is zero, in {subject}; initial array sizes must be "
-            "positive (set min=\"0\" on the structural parameter to let the array vanish later)",
-    "unknown-vr": "<Dimension> valueReference naming no variable, in {subject}; point it at a "
-                  "UInt64 structural parameter or constant",
-    "target": "<Dimension> valueReference naming a variable that is not a UInt64 constant or "
-              "structural parameter, in {subject}; sizes come from UInt64 structural parameters "
-              "or constants",
+class _Fault(NamedTuple):
+    """A <Dimension> fault's message and catalogue part (None: the rule's own case)."""
+
+    message: str
+    part: str | None = None
+
+
+_DIMENSION_FAULTS = {
+    "both": _Fault("<Dimension> with both start and valueReference, in {subject}; give the size "
+                   "one way: start for a constant size, valueReference for a size set by a "
+                   "variable", part="both"),
+    "neither": _Fault("<Dimension> with neither start nor valueReference, in {subject}; give "
+                      "the size as start=\"n\" or as the valueReference of a UInt64 structural "
+                      "parameter", part="neither"),
+    "zero": _Fault("<Dimension> whose initial size is zero, in {subject}; initial array sizes "
+                   "must be positive (set min=\"0\" on the structural parameter to let the "
+                   "array vanish later)"),
+    "unknown-vr": _Fault("<Dimension> valueReference naming no variable, in {subject}; point it "
+                         "at a UInt64 structural parameter or constant", part="unknown-vr"),
+    "target": _Fault("<Dimension> valueReference naming a variable that is not a UInt64 "
+                     "constant or structural parameter, in {subject}; sizes come from UInt64 "
+                     "structural parameters or constants", part="target"),
 }
 
 
@@ -114,8 +125,9 @@ def dimension_invalid(ctx: CheckContext) -> Iterator[Violation]:
             if found is None:
                 continue
             fault, target = found
+            message, part = _DIMENSION_FAULTS[fault]
             yield Violation(
-                _DIMENSION_MESSAGES[fault],
+                message,
                 Location(file=model.file, line=dim.line or var.line, path=var.path),
                 evidence(fault=fault, start=dim.start, dimension_value_reference=dim.vr,
                          target=target.name if target is not None else None,
@@ -123,7 +135,7 @@ def dimension_invalid(ctx: CheckContext) -> Iterator[Violation]:
                          target_causality=target.causality if target is not None else None,
                          target_variability=target.variability if target is not None else None,
                          target_start=target.start if target is not None else None),
-                subject=var.name)
+                subject=var.name, part=part)
 
 
 def clocks_invalid(ctx: CheckContext) -> Iterator[Violation]:

@@ -65,9 +65,12 @@ def _listed(model: ModelDescription, kind: str) -> Iterator[tuple[Unknown, Varia
 
 
 def _set_mismatch(model: ModelDescription, kind: str, expected: dict[int, str],
-                  allowed_extra: set[int], messages: tuple[str, str, str]
-                  ) -> Iterator[Violation]:
-    """Compare a ModelStructure list with the set it must equal; yield extra/duplicate/missing."""
+                  allowed_extra: set[int], messages: tuple[str, str, str],
+                  event_indicators: frozenset[int] = frozenset()) -> Iterator[Violation]:
+    """Compare a ModelStructure list with the set it must equal; yield extra/duplicate/missing.
+
+    A duplicate is the rules' part ``duplicate``; an extra entry that is one of
+    ``event_indicators`` is the part ``event-indicator-listed`` (of InitialUnknown)."""
     not_member, duplicate, missing = messages
     unknowns = analyse(model).unknowns(kind)
     vrs = list(filter(model.by_vr.__contains__, map(attrgetter("vr"), unknowns)))
@@ -80,14 +83,15 @@ def _set_mismatch(model: ModelDescription, kind: str, expected: dict[int, str],
         vr = var.vr
         if vr in seen:
             yield Violation(duplicate, unknown_loc(u), evidence(kind=kind, value_reference=vr),
-                            subject=var.name)
+                            subject=var.name, part="duplicate")
             continue
         seen.add(vr)  # type: ignore[arg-type]
         if vr not in expected and vr not in allowed_extra:
             yield Violation(not_member, unknown_loc(u),
                             evidence(kind=kind, value_reference=vr, causality=var.causality,
                                      variability=var.variability, initial=var.initial),
-                            subject=var.name)
+                            subject=var.name,
+                            part="event-indicator-listed" if vr in event_indicators else None)
     for vr, reason in expected.items():
         if vr not in seen:
             var = model.by_vr[vr]
@@ -185,7 +189,7 @@ def model_structure_initial_unknown_mismatch(ctx: CheckContext) -> Iterator[Viol
         "<InitialUnknown> listed twice: {subject}; list every initial unknown exactly once",
         "missing from the <InitialUnknown> list: {subject}; outputs, calculated parameters, "
         "states and derivatives with initial approx or calculated must be listed, add it",
-    ))
+    ), frozenset(u.vr for u in analysis.unknowns("EventIndicator") if u.vr is not None))
 
 
 def directional_derivatives_missing(ctx: CheckContext) -> Iterator[Violation]:

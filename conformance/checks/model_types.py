@@ -90,7 +90,7 @@ def unit_undefined(ctx: CheckContext) -> Iterator[Violation]:
             yield Violation(message.format(where=_ON_TYPE), _type_loc(model, t),
                             evidence(unit=t.unit, type_definition=t.name,
                                      defined_units=sorted(units)[:_SHOWN]),
-                            subject=t.name)
+                            subject=t.name, part="type-definition-unit")
     for var in _typed(ctx):
         if var.unit is not None and var.unit not in units:
             yield Violation(message.format(where=_ON_VARIABLE), var_loc(model, var),
@@ -108,7 +108,8 @@ def display_unit_undefined(ctx: CheckContext) -> Iterator[Violation]:
     for t in model.definitions.types:
         if t.display_unit is not None:
             yield from _display_unit(model, units, t.display_unit, t.unit, t.name, _ON_TYPE,
-                                     _type_loc(model, t), evidence(type_definition=t.name))
+                                     _type_loc(model, t), evidence(type_definition=t.name),
+                                     part="type-definition")
     for var in _typed(ctx):
         if var.display_unit is None and not var.alias_display_units:
             continue
@@ -125,17 +126,21 @@ def display_unit_undefined(ctx: CheckContext) -> Iterator[Violation]:
                 model, units, display, unit, name, _ON_ALIAS if is_alias else _ON_VARIABLE,
                 var_loc(model, var),
                 evidence(alias=is_alias, variable=var.name, unit_from=unit_from,
-                         value_reference=var.vr))
+                         value_reference=var.vr),
+                part="alias" if is_alias else None)
 
 
 def _display_unit(model: ModelDescription, units: dict[str, UnitDefinition], display: str,
                   unit: str | None, subject: str, where: str, location: Location,
-                  context: tuple) -> Iterator[Violation]:
+                  context: tuple, part: str | None) -> Iterator[Violation]:
+    """``part``: the catalogue part of a display unit its unit lacks ("type-definition",
+    "alias", or None for a variable's); without a unit it is "no-unit", an alias's "alias"."""
     if unit is None:
         yield Violation(
             f"displayUnit without a unit, on {where}; a display unit converts from a unit, so "
             "add the unit attribute (or remove displayUnit)",
-            location, evidence(dict(context), display_unit=display), subject=subject)
+            location, evidence(dict(context), display_unit=display), subject=subject,
+            part="no-unit" if part != "alias" else part)
         return
     definition = units.get(unit)
     if definition is None or display in definition.display_units:
@@ -146,7 +151,7 @@ def _display_unit(model: ModelDescription, units: dict[str, UnitDefinition], dis
         location,
         evidence(dict(context), display_unit=display, unit=unit,
                  defined_display_units=list(definition.display_units[:_SHOWN])),
-        subject=subject)
+        subject=subject, part=part)
 
 
 CHECKS: dict[str, Check] = {

@@ -15,11 +15,11 @@ by ``model-structure-unknown-vr``.
 from __future__ import annotations
 
 from operator import attrgetter
-from typing import Iterator
+from typing import Iterator, NamedTuple
 
 from .context import Check, CheckContext
 from ..report.findings import Location, Violation, evidence
-from ..model.description import FLOAT_TYPES, Variable
+from ..model.description import FLOAT_TYPES, ModelDescription, Variable
 from ..model.unknowns import Unknown
 from .model_analysis import (
     ALLOWED_VARIABILITY,
@@ -81,36 +81,46 @@ def variable_name_duplicate(ctx: CheckContext) -> Iterator[Violation]:
     names = [var.name for var in model.variables]
     if not any(map(attrgetter("aliases"), model.variables)) and len(set(names)) == len(names):
         return  # the usual case, decided in C
-    seen: dict[str, str] = {}   # name -> the variable that first used it
+    seen: dict[str, tuple[str, bool]] = {}   # name -> the variable that first used it, by alias?
     for var in model.variables:
         entries = [(var.name, var.line, False)] if var.name else []
         entries.extend((n, line, True) for n, line in _alias_entries(var))
         for name, line, is_alias in entries:
-            owner = seen.get(name)
-            if owner is None:
-                seen[name] = var.name
+            first = seen.get(name)
+            if first is None:
+                seen[name] = (var.name, is_alias)
                 continue
+            owner, first_alias = first
             yield Violation(
                 "name used by more than one variable or alias: {subject}; rename so that every "
                 "variable and alias name is unique",
                 Location(file=model.file, line=line, path=var.path),
                 evidence(first_variable=owner, variable=var.name, alias=is_alias,
                          value_reference=var.vr),
-                subject=name)
+                subject=name, part="alias-name" if is_alias or first_alias else None)
 
 
-_VARIABILITY_MESSAGES = {
-    "combination": "variability not allowed for the causality of {subject}; use a "
-                   "combination from the FMI 3.0 causality/variability table",
-    "continuous-non-float": "variability \"continuous\" on a variable that is not a "
-                            "Float32/Float64: {subject}; only floats may be continuous, use "
-                            "\"discrete\"",
-    "clock-causality": "Clock with a causality other than input, output or local: {subject}; "
-                       "give it one of those causalities",
-    "clock-variability": "Clock with a variability other than discrete: {subject}; Clocks are "
-                         "always discrete, remove the attribute",
-    "clocked": "clocked variable neither discrete nor tunable: {subject}; a variable with a "
-               "clocks attribute must be discrete or tunable",
+class _Fault(NamedTuple):
+    """A variability fault's message and catalogue part (None: the rule's own case)."""
+
+    message: str
+    part: str | None = None
+
+
+_VARIABILITY_FAULTS = {
+    "combination": _Fault("variability not allowed for the causality of {subject}; use a "
+                          "combination from the FMI 3.0 causality/variability table"),
+    "continuous-non-float": _Fault("variability \"continuous\" on a variable that is not a "
+                                   "Float32/Float64: {subject}; only floats may be continuous, "
+                                   "use \"discrete\"", part="continuous-non-float"),
+    "clock-causality": _Fault("Clock with a causality other than input, output or local: "
+                              "{subject}; give it one of those causalities",
+                              part="clock-causality"),
+    "clock-variability": _Fault("Clock with a variability other than discrete: {subject}; "
+                                "Clocks are always discrete, remove the attribute",
+                                part="clock-variability"),
+    "clocked": _Fault("clocked variable neither discrete nor tunable: {subject}; a variable "
+                      "with a clocks attribute must be discrete or tunable", part="clocked"),
 }
 
 
@@ -122,13 +132,14 @@ def causality_variability_invalid(ctx: CheckContext) -> Iterator[Violation]:
     for var, (fault, _, _) in analyse(model).verdicts:
         if fault is None or var.vr in enable:
             continue
+        message, part = _VARIABILITY_FAULTS[fault]
         yield Violation(
-            _VARIABILITY_MESSAGES[fault], var_loc(model, var),
+            message, var_loc(model, var),
             evidence(fault=fault, type=var.type, causality=var.causality,
                      variability=var.variability,
                      variability_declared=var.declared_variability is not None,
                      allowed=sorted(ALLOWED_VARIABILITY.get(var.causality, ()))),
-            subject=var.name)
+            subject=var.name, part=part)
 
 
 def initial_invalid(ctx: CheckContext) -> Iterator[Violation]:
@@ -206,13 +217,26 @@ def independent_variable_invalid(ctx: CheckContext) -> Iterator[Violation]:
         (f"variability {first.variability}", first.variability != "continuous"),
         ("start", first.start is not None), ("initial", first.declared_initial is not None),
     ) if bad]
-    if problems:
-        yield Violation(
-            "independent variable {subject} must be a continuous Float32/Float64 without start "
-            "or initial attributes; fix the attributes listed in the evidence",
-            var_loc(model, first),
-            evidence(problems=problems, type=first.type, variability=first.variability),
-            subject=first.name)
+    if not problems:
+        return
+    # One finding lists every problem; its part is the first that applies, the MUSTs (type or
+    # start, initial) before the table of allowed pairs (variability).
+    if not first.is_float or first.start is not None:
+        yield _independent_attributes(model, first, problems, part="type-or-start")
+    elif first.declared_initial is not None:
+        yield _independent_attributes(model, first, problems, part="initial")
+    else:
+        yield _independent_attributes(model, first, problems, part="variability")
+
+
+def _independent_attributes(model: ModelDescription, first: Variable, problems: list[str],
+                            part: str) -> Violation:
+    return Violation(
+        "independent variable {subject} must be a continuous Float32/Float64 without start "
+        "or initial attributes; fix the attributes listed in the evidence",
+        var_loc(model, first),
+        evidence(problems=problems, type=first.type, variability=first.variability),
+        subject=first.name, part=part)
 
 
 def derivative_invalid(ctx: CheckContext) -> Iterator[Violation]:
@@ -225,19 +249,24 @@ def derivative_invalid(ctx: CheckContext) -> Iterator[Violation]:
     targets = list(map(by_vr.get, map(attrgetter("derivative"), derivatives)))
     if all(targets) and FLOAT_TYPES.issuperset(map(attrgetter("type"), targets)):
         derivatives = []  # the usual case: every target exists and is a float, decided in C
+    listed: set[int | None] = set()   # the ContinuousStateDerivatives, when a target is wrong
+    if derivatives:
+        listed.update(map(attrgetter("vr"), analyse(model).unknowns("ContinuousStateDerivative")))
     for var, target in zip(derivatives, targets):
         if target is None:
             yield Violation(
                 "derivative attribute naming a valueReference that no variable has, on "
                 "{subject}; point it at the variable this one is the derivative of",
                 var_loc(model, var), evidence(derivative=var.derivative), subject=var.name)
-        elif not target.is_float:
-            yield Violation(
-                "derivative attribute naming a variable that is not a Float32/Float64, on "
-                "{subject}; derivatives can only be of floating-point variables",
-                var_loc(model, var),
-                evidence(derivative=var.derivative, target=target.name, target_type=target.type),
-                subject=var.name)
+        elif target.is_float:
+            continue
+        elif (var.vr not in listed and var.causality in ("input", "output")
+              and target.causality in ("input", "output")):
+            # an input or output linked to the input or output it is the derivative of, not
+            # listed as a state derivative: no state (FMI 3.0.2 §2.4.7.5)
+            yield _target_not_float(model, var, target, part="target-not-float-io-link")
+        else:
+            yield _target_not_float(model, var, target, part="target-not-float")
     if derivatives_listed_well(model):
         return
     states: dict[int, tuple[Unknown, Variable]] = {}  # state vr -> first CSD naming it
@@ -251,7 +280,7 @@ def derivative_invalid(ctx: CheckContext) -> Iterator[Violation]:
                 "derivative=\"<valueReference of its state>\"",
                 var_loc(model, der),
                 evidence(value_reference=der.vr, type=der.type, structure_line=u.line),
-                subject=der.name)
+                subject=der.name, part="csd-without-derivative")
             continue
         state = by_vr.get(der.derivative)
         if state is None or not state.is_float:
@@ -263,7 +292,7 @@ def derivative_invalid(ctx: CheckContext) -> Iterator[Violation]:
                 var_loc(model, der),
                 evidence(derivative_variability=der.variability, state=state.name,
                          state_variability=state.variability),
-                subject=der.name)
+                subject=der.name, part="not-continuous")
         if state.vr is None:
             continue
         earlier_u, earlier = states.setdefault(state.vr, (u, der))
@@ -274,7 +303,17 @@ def derivative_invalid(ctx: CheckContext) -> Iterator[Violation]:
                 unknown_loc(u),
                 evidence(state=state.name, earlier_derivative=earlier.name,
                          earlier_line=earlier_u.line, value_reference=der.vr),
-                subject=der.name)
+                subject=der.name, part="state-listed-twice")
+
+
+def _target_not_float(model: ModelDescription, var: Variable, target: Variable,
+                      part: str) -> Violation:
+    return Violation(
+        "derivative attribute naming a variable that is not a Float32/Float64, on "
+        "{subject}; derivatives can only be of floating-point variables",
+        var_loc(model, var),
+        evidence(derivative=var.derivative, target=target.name, target_type=target.type),
+        subject=var.name, part=part)
 
 
 CHECKS: dict[str, Check] = {

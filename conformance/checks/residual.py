@@ -25,6 +25,7 @@ from ..model.description import FLOAT_TYPES, Variable
 from ..model.unknowns import Unknown
 from .algebraic import element_count, states_of
 from .dae_form import fully_implicit
+from .dae_roles import roles_of
 from .listing import (
     Listing,
     Problems,
@@ -109,7 +110,8 @@ def residual_unknown_vr(ctx: CheckContext) -> Iterator[Violation]:
             yield Violation(
                 "a Residual has no valueReference, or one that is not an unsigned integer; give "
                 "the valueReference of the variable that holds the residual",
-                _at(res), evidence(value_reference=None, reason="missing or not an integer"))
+                _at(res), evidence(value_reference=None, reason="missing or not an integer"),
+                part="missing-or-not-integer")
         elif res.vr not in ctx.model.by_vr:
             yield Violation(
                 "Residual valueReference {subject} names no variable of modelDescription.xml; "
@@ -142,17 +144,33 @@ def residual_not_float_continuous(ctx: CheckContext) -> Iterator[Violation]:
 
 
 def residual_is_state_derivative_or_input(ctx: CheckContext) -> Iterator[Violation]:
-    """DAE-32: a residual is not a state, a state derivative, an input or the independent one."""
+    """DAE-32: a residual is not a state, a state derivative, an input or the independent one.
+
+    The rule's own case is an input, the independent variable or a state of DAE mode
+    (:class:`.dae_roles.DaeRoles`: the manifest's ContinuousStateDerivative list, or
+    modelDescription's when it lists none). Otherwise a variable with a derivative attribute is
+    the part state-derivative, and a state of ODE mode only the part ode-only-state."""
     for res, var in _classified(ctx, STATE_OR_INPUT):
         if var.causality in SET_BY_IMPORTER:
             role = var.causality
         else:
             role = "state derivative" if var.derivative is not None else "continuous state"
-        yield Violation(
-            "residual {subject} is a continuous state, a state derivative, an input or the "
-            "independent variable; a residual must be a local or output variable that the FMU "
-            "computes from the algebraic variables",
-            _at(res), evidence(facts(var, res), role=role), subject=var.name)
+        if var.causality in SET_BY_IMPORTER or var.vr in roles_of(ctx).states:
+            yield _state_derivative_or_input(res, var, role, part=None)
+        elif var.derivative is not None:
+            yield _state_derivative_or_input(res, var, role, part="state-derivative")
+        else:  # a state only by modelDescription's list, which the manifest's replaces
+            yield _state_derivative_or_input(res, var, role, part="ode-only-state")
+
+
+def _state_derivative_or_input(res: Unknown, var: Variable, role: str, *,
+                               part: str | None) -> Violation:
+    """The finding of :func:`residual_is_state_derivative_or_input` for ``res``."""
+    return Violation(
+        "residual {subject} is a continuous state, a state derivative, an input or the "
+        "independent variable; a residual must be a local or output variable that the FMU "
+        "computes from the algebraic variables",
+        _at(res), evidence(facts(var, res), role=role), subject=var.name, part=part)
 
 
 def residual_count_mismatch(ctx: CheckContext) -> Iterator[Violation]:

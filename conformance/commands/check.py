@@ -32,6 +32,8 @@ from .precommit import fmu_roots
 from ..run.progress import make_progress
 from ..reporters import REPORTER_BY_NAME
 
+INTERNAL_ERROR = "internal-error"   # lsdae failed on an FMU: exit 2, whatever its severity
+
 
 def _split(values: Sequence[str] | None) -> tuple[str, ...]:
     out: list[str] = []
@@ -133,9 +135,13 @@ def _read_baseline(settings: _RunSettings, args: argparse.Namespace) -> Baseline
 
 
 def exit_code(report: Report, fail_on: str) -> int:
-    """1 when a finding reaches the ``--fail-on`` severity, else 0."""
+    """1 when a finding reaches the ``--fail-on`` severity, else 0; 2 when lsdae itself failed
+    on an FMU (``internal-error``, a warning: a limit of lsdae's, never a verdict on the FMU, but
+    an FMU nobody checked must not pass)."""
     if fail_on == "never":
         return EXIT_OK
+    if any(f.name == INTERNAL_ERROR for f in report.all_findings()):
+        return EXIT_USAGE
     return EXIT_FINDINGS if report.has_at_least(Severity.parse(fail_on)) else EXIT_OK
 
 

@@ -81,7 +81,8 @@ def open_fmu(path: Path, *, limits: ArchiveLimits | None = None
     except Exception as exc:  # a last resort: the FMU must never crash the checker
         log.debug("open_fmu(%s) failed", path, exc_info=True)
         return None, [archive_violation(UNREADABLE,
-                                        f"the FMU cannot be opened: {describe_error(exc)}")]
+                                        f"the FMU cannot be opened: {describe_error(exc)}",
+                                        part="path-or-system-error")]
 
 
 def find_manifest_candidates(source: FmuSource) -> list[str]:

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import copy
 import threading
+from dataclasses import replace
 from typing import Iterator, Union
 
 from lxml import etree
@@ -110,13 +111,23 @@ def validate_manifest(tree: XmlInput, draft: str, *, file: str) -> Iterator[Viol
     legacy = draft in LEGACY_DRAFTS
     accepted_ns = (None, LS_NAMESPACE) if legacy else (None,)
     if qname.localname != expected or qname.namespace not in accepted_ns:
-        yield _wrong_root(root, draft, expected, file=file, schema_name=schema_name)
+        if legacy:
+            yield _wrong_root(root, draft, expected, file=file, schema_name=schema_name,
+                              part="legacy-draft-schema")
+        else:
+            yield _wrong_root(root, draft, expected, file=file, schema_name=schema_name,
+                              part="alpha1-manifest")
         return
     target: XmlInput = tree
     originals: list[etree._Element] | None = None
     if legacy and _has_ls_elements(root):
         target, originals = _unqualified_copy(root)
-    yield from _run(manifest_schema(draft), target, file=file, schema_name=schema_name, originals=originals)
+    if legacy:
+        yield from _run(manifest_schema(draft), target, file=file, schema_name=schema_name,
+                        originals=originals, part="legacy-draft-schema")
+    else:
+        yield from _run(manifest_schema(draft), target, file=file, schema_name=schema_name,
+                        part="alpha1-manifest", published=True)
 
 
 def _run(
@@ -127,7 +138,12 @@ def _run(
     schema_name: str,
     originals: list[etree._Element] | None = None,
     rule: str = RULE,
+    part: str | None = None,
+    published: bool = False,
 ) -> Iterator[Violation]:
+    """Validate ``target``; each error is a violation of ``rule`` and ``part``. With
+    ``published`` (the alpha.1 manifest), an error the published alpha.1 XSD would not make is
+    the part ``beyond-published-xsd`` (:func:`_beyond_published_xsd`)."""
     with _VALIDATE_LOCK:
         valid = schema.validate(target)
         entries = [] if valid else list(schema.error_log)
@@ -143,13 +159,17 @@ def _run(
         line = entry.line or None
         if originals is not None and path:
             line = _original_line(target, path, originals) or line
-        yield Violation(
+        violation = Violation(
             message=clean_message(entry.message),
             location=Location(file=file, line=line, column=entry.column or None, path=path),
             evidence=evidence(schema=schema_name, xsd_error=entry.type_name),
             subject=path,
             rule=rule,
+            part=part,
         )
+        if published and _beyond_published_xsd(entry, attribute, target):
+            violation = replace(violation, part="beyond-published-xsd")
+        yield violation
 
 
 def _wrong_core_root(root: etree._Element, document: str, expected: str, *, file: str,
@@ -166,7 +186,8 @@ def _wrong_core_root(root: etree._Element, document: str, expected: str, *, file
     )
 
 
-def _wrong_root(root: etree._Element, draft: str, expected: str, *, file: str, schema_name: str) -> Violation:
+def _wrong_root(root: etree._Element, draft: str, expected: str, *, file: str, schema_name: str,
+                part: str | None = None) -> Violation:
     written = written_name(root)
     namespace = etree.QName(root).namespace
     if draft == ALPHA1 and etree.QName(root).localname == expected:
@@ -186,11 +207,43 @@ def _wrong_root(root: etree._Element, draft: str, expected: str, *, file: str, s
         evidence=evidence(schema=schema_name, root=written, namespace=namespace, expected_root=expected),
         subject="/" + written,
         rule=RULE,
+        part=part,
     )
 
 
 # --------------------------------------------------------------------------------------------
 # Helpers
+
+# lsdae's alpha.1 XSD types these elements lsdaeValueReferenceOnly (a valueReference, nothing
+# else); the published alpha.1 XSD types them TVariableReference, a restriction of fmi3Unknown
+# that still allows these attributes and an <Annotations> child.
+_VALUE_REFERENCE_ONLY = ("EnableDAEParameter", "AlgebraicVariable")
+_PUBLISHED_ATTRIBUTES = ("dependencies", "dependenciesKind")
+
+
+def _beyond_published_xsd(entry: etree._LogEntry, attribute: str | None,
+                          target: XmlInput) -> bool:
+    """Whether an alpha.1 schema error is one only lsdae's stricter XSD makes: an
+    EnableDAEParameter or AlgebraicVariable with dependencies, dependenciesKind, or a single
+    <Annotations> child and no text."""
+    path = entry.path or ""
+    if path.rsplit("/", 1)[-1].split("[", 1)[0] not in _VALUE_REFERENCE_ONLY:
+        return False
+    if entry.type_name == "SCHEMAV_CVC_COMPLEX_TYPE_3_2_1":  # attribute not allowed
+        return attribute in _PUBLISHED_ATTRIBUTES
+    if entry.type_name != "SCHEMAV_CVC_COMPLEX_TYPE_2_1":    # content where the type is empty
+        return False
+    try:
+        found = _root_of(target).getroottree().xpath(path)
+    except etree.XPathError:
+        return False
+    if not found or not isinstance(found[0], etree._Element):
+        return False
+    element = found[0]
+    children = [c for c in element if isinstance(c.tag, str)]
+    texts = [element.text] + [c.tail for c in element]
+    return (len(children) == 1 and children[0].tag == "Annotations"
+            and not "".join(t or "" for t in texts).strip())
 
 
 def _root_of(tree: XmlInput) -> etree._Element:

@@ -51,7 +51,8 @@ def encoding_violations(data: bytes, where: Location, *,
         what = ("has an XML declaration without encoding" if declaration
                 else "has no XML declaration")
         return [Violation(f'{what}; FMI asks for <?xml version="1.0" encoding="UTF-8"?> on the '
-                          "first line", Location(file=where.file, line=1), rule=ENCODING)]
+                          "first line", Location(file=where.file, line=1), rule=ENCODING,
+                          part="declaration-missing")]
     return []
 
 

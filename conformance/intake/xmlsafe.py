@@ -37,6 +37,8 @@ KNOWN_PREFIXES = {
     "xs": "http://www.w3.org/2001/XMLSchema",
 }
 
+# The file name of every layered standard's manifest (FMI 3.0.2 §2.6: extra/<ls-name>/...).
+_LS_MANIFEST = "fmi-ls-manifest.xml"
 _UNDEFINED_PREFIX = re.compile(r"Namespace prefix (\S+?) (?:for (\S+) )?on (\S+) is not defined")
 # The root element's name: the first "<" that opens an element (not <?, <!, a comment).
 _ROOT_START = re.compile(rb"<(?![?!])[A-Za-z_][\w.:-]*")
@@ -206,6 +208,10 @@ def _syntax_violation(err: etree._LogEntry, file: str, *, further: int) -> Viola
         ev.update(prefix=prefix, element=element)
         if attribute:
             ev["attribute"] = f"{prefix}:{attribute}"
+        if uri is not None and file.rsplit("/", 1)[-1] == _LS_MANIFEST:
+            # a layered-standard manifest whose fmi-ls: (or xsi:, xs:) prefix is not declared
+            return Violation(message, where, evidence(ev), rule=NOT_WELL_FORMED,
+                             part="undeclared-fmi-ls-prefix")
         return Violation(message, where, evidence(ev), rule=NOT_WELL_FORMED)
     if err.type_name == "ERR_INVALID_ENCODING" or "Invalid bytes in character encoding" in text:
         message = ("contains bytes that are not valid in its encoding (FMI requires UTF-8; "

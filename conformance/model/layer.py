@@ -70,9 +70,12 @@ def manifest_missing(model: ModelDescription | None, names: Sequence[str]) -> Vi
     else:
         message = (f"no {MANIFEST}, although {declaration} declares the fmi-ls-dae layer: the "
                    "DAE rules that need the manifest are skipped")
+    # files of the layer's folder, but not the manifest alpha.1 requires there
+    folder = declaration is not None and declaration.startswith(LAYER_FOLDER)
     return Violation(message, Location(file=MANIFEST),
                      evidence(interface_types=list(interface_types(model)),
-                              layer_declared_by=declaration))
+                              layer_declared_by=declaration),
+                     part="layer-folder-without-manifest" if folder else None)
 
 
 def skip_reason(needs: Sequence[str], have: Mapping[str, bool]) -> str | None:

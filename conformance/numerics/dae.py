@@ -40,6 +40,11 @@ from .settings import BUDGET, FMU_FAILED, INIT, OK, SINGULAR, SOLVER, Settings, 
 
 log = logging.getLogger(__name__)
 
+#: The message of a run that failed, stalled or ran out of steps where dg/dw was worse than
+#: ``stalled_condition`` (:func:`_diagnose_at_end`): singular by lsdae's attribution, not because
+#: ``max_condition`` stopped it on the way (the simulation probe tells the two apart by it).
+STALLED_SINGULAR = "dg/dw became nearly singular and the solver could not go on"
+
 @dataclass
 class _Run:
     """Counters and the record of failed evaluations, shared by the callbacks."""
@@ -282,7 +287,7 @@ def _diagnose_at_end(traj: Trajectory, run: _Run, stepper: Stepper) -> None:
         run.max_condition, run.max_condition_t = cond, stepper.t
     if cond > run.settings.stalled_condition:
         traj.status = SINGULAR
-        traj.message = "dg/dw became nearly singular and the solver could not go on"
+        traj.message = STALLED_SINGULAR
         traj.event = {"t": stepper.t, **_singular_details(
             run.system, stepper.y, cond, direction, run.settings.stalled_condition)}
 

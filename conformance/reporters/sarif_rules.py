@@ -81,7 +81,7 @@ def _descriptor(rule: RuleSpec, docs_url: str) -> dict[str, Any]:
             "precision": "high" if rule.stage in ("probe", "simulation") else "very-high",
             "problem.severity": _PROBLEM_SEVERITY[rule.severity],
             "spec": rule.spec,
-            "basis": rule.basis.kind if rule.basis else None,
+            **({"basis": rule.basis.kind} if rule.basis else {}),
             "drafts": list(rule.drafts),
         },
     }

@@ -17,7 +17,7 @@ from ..model.drafts.migrate import legacy_violations
 from .options import EngineOptions
 from ..report.findings import Location, Violation, evidence
 from ..intake.fmu import ArchiveReadError
-from ..model.layer import manifest_missing
+from ..model.layer import layer_declaration, manifest_missing
 from ..model.manifest import MANIFEST, Manifest, read_manifest
 from ..model.description import MODEL_DESCRIPTION, ModelDescription, read_model_description
 from ..intake.schemas import validate_manifest, validate_model_description
@@ -100,11 +100,13 @@ def read_model(source, names: Sequence[str], options: EngineOptions, collector: 
         return None
     version = (tree.getroot().get("fmiVersion") or "").strip()
     if version[:2] in ("1.", "2."):  # out of scope: said once, nothing else is checked
+        # an FMI 1.0/2.0 FMU that carries files of the fmi-ls-dae folder claims the layer
+        layer = layer_declaration(None, names) is not None
         collector.emit("fmi-version-unsupported", Violation(
             f"an FMI {version} FMU: fmi-ls-dae is a layered standard of FMI 3.0, so this FMU "
             "is not checked", Location(file=MODEL_DESCRIPTION, line=tree.getroot().sourceline,
                                        path="/fmiModelDescription"),
-            evidence(fmi_version=version)))
+            evidence(fmi_version=version), part="fmi2-with-dae-layer" if layer else None))
         state.not_checked = f"FMI {version} FMU: fmi-ls-dae needs FMI 3.0"
         return None
     if options.probes_only:

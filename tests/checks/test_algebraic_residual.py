@@ -309,3 +309,45 @@ def test_element_count():
     assert algebraic.element_count(model, model.by_vr[13]) == 3
     assert algebraic.element_count(model, model.by_vr[14]) == 2
     assert algebraic.element_count(model, model.by_vr[16]) is None
+
+
+# ---- parts (catalogue [[rule.parts]]): the sub-check a violation is -------------------------
+
+# modelDescription.xml also lists der(x2) (vr 18), the manifest only der(x) (vr 3): x2 (vr 17)
+# is a state of ODE mode only
+_ODE_ONLY = '<ContinuousStateDerivative valueReference="3"/><ContinuousStateDerivative ' \
+            'valueReference="18"/>'
+
+
+@pytest.mark.parametrize("alg, res, md_structure, code, part", [
+    (("4", "99"), ("6", "7"), None, "DAE301", None),                       # no such variable
+    (("4", "y"), ("6", "7"), None, "DAE301", "missing-or-not-integer"),
+    (("4", "2"), ("6", "7"), None, "DAE305", None),                        # DAE-mode state
+    (("4", "3"), ("6", "7"), None, "DAE305", None),                        # DAE-mode derivative
+    (("4", "17"), ("6", "7"), _ODE_ONLY, "DAE305", "not-a-dae-mode-state-or-derivative"),
+    (("4", "18"), ("6", "7"), None, "DAE305", "not-a-dae-mode-state-or-derivative"),  # unlisted
+    (("4", "18"), ("6", "7"), _ODE_ONLY, "DAE305", "not-a-dae-mode-state-or-derivative"),
+    (("4", "8"), ("6", "7"), None, "DAE306", None),                        # parameter
+    (("4", "9"), ("6", "7"), None, "DAE306", None),                        # input
+    (("4", "19"), ("6", "7"), None, "DAE306", "structural-or-calculated-parameter"),
+    (("4", "5"), ("6", "77"), None, "DAE401", None),                       # no such variable
+    (("4", "5"), ("6", "g2"), None, "DAE401", "missing-or-not-integer"),
+    (("4", "5"), ("6", "2"), None, "DAE404", None),                        # DAE-mode state
+    (("4", "5"), ("6", "9"), None, "DAE404", None),                        # input
+    (("4", "5"), ("6", "0"), None, "DAE404", None),                        # independent
+    (("4", "5"), ("6", "3"), None, "DAE404", "state-derivative"),
+    (("4", "5"), ("6", "17"), _ODE_ONLY, "DAE404", "ode-only-state"),
+])
+def test_part_of_violation(alg, res, md_structure, code, part):
+    model = _model(md_structure) if md_structure else None
+    fired = _fired(_ctx(_alpha1(alg, res), model))
+    assert set(fired) == {code}, fired
+    assert [v.part for v in fired[code]] == [part]
+
+
+def test_part_of_missing_algebraic_value_reference():
+    xml = ('<fmiDAEManifest><AlgebraicVariables><AlgebraicVariable/></AlgebraicVariables>'
+           '</fmiDAEManifest>')
+    bare = read_manifest(etree.ElementTree(etree.fromstring(xml)), draft="alpha1")
+    (v,) = algebraic.algebraic_unknown_vr(_ctx(bare))
+    assert v.part == "missing-or-not-integer"

@@ -489,3 +489,99 @@ def test_big_model_is_clean():
     ctx = ctx_of(big_model_xml(2000), manifest=MANIFEST)
     for code in CHECKS:
         assert run(code, ctx) == [], code
+
+
+# --- parts: the sub-checks whose basis differs carry their catalogue part -----------------------
+
+def parts(code: str, ctx: CheckContext) -> list:
+    return [v.part for v in run(code, ctx)]
+
+
+def test_alias_name_part():
+    alias = '<Float64 name="w" valueReference="9"><Alias name="y"/><Alias name="y2"/></Float64>'
+    assert parts("DAE503", ctx_of(variables=VARIABLES + alias)) == ["alias-name"]
+    after = ('<Float64 name="w" valueReference="9"><Alias name="a1"/></Float64>'
+             '<Float64 name="a1" valueReference="10"/>')
+    assert parts("DAE503", ctx_of(variables=VARIABLES + after)) == ["alias-name"]
+    assert parts("DAE503", ctx_of(variables=VARIABLES + '<Float64 name="y" valueReference="9"/>')
+                 ) == [None]
+
+
+@pytest.mark.parametrize("decl, part", [
+    ('<Float64 name="p" valueReference="9" causality="input" variability="fixed" start="1"/>',
+     None),
+    ('<Int32 name="p" valueReference="9" variability="continuous"/>', "continuous-non-float"),
+    ('<Clock name="p" valueReference="9" causality="parameter"/>', "clock-causality"),
+    ('<Clock name="p" valueReference="9" causality="input" variability="tunable"/>',
+     "clock-variability"),
+    ('<Float64 name="p" valueReference="9" clocks="10"/>', "clocked"),
+])
+def test_causality_variability_parts(decl, part):
+    assert parts("DAE504", ctx_of(variables=VARIABLES + decl)) == [part]
+
+
+@pytest.mark.parametrize("attrs, part", [
+    ('causality="independent" variability="continuous" start="0"', "type-or-start"),
+    ('causality="independent" variability="discrete" start="0" initial="exact"', "type-or-start"),
+    ('causality="independent" variability="continuous" initial="exact"', "initial"),
+    ('causality="independent" variability="discrete" initial="exact"', "initial"),
+    ('causality="independent" variability="discrete"', "variability"),
+])
+def test_independent_attribute_parts(attrs, part):
+    variables = VARIABLES.replace('causality="independent" variability="continuous"', attrs)
+    assert parts("DAE508", ctx_of(variables=variables)) == [part]
+    no_time = VARIABLES.replace('causality="independent" variability="continuous"', "")
+    assert parts("DAE508", ctx_of(variables=no_time)) == [None]
+
+
+def test_derivative_parts():
+    assert parts("DAE509", ctx_of(variables=VARIABLES.replace('derivative="2"', 'derivative="99"'))
+                 ) == [None]
+    assert parts("DAE509", ctx_of(variables=VARIABLES.replace('derivative="2"', 'derivative="1"'))
+                 ) == ["target-not-float"]
+    link = ('<Int32 name="n" valueReference="9" causality="input" start="0"/>'
+            '<Float64 name="dn" valueReference="10" causality="output" derivative="9"/>')
+    assert parts("DAE509", ctx_of(variables=VARIABLES + link)) == ["target-not-float-io-link"]
+    # listed as a state derivative: the target is a state even when both are inputs/outputs
+    listed = STRUCTURE + '<ContinuousStateDerivative valueReference="10"/>'
+    assert parts("DAE509", ctx_of(variables=VARIABLES + link, structure=listed))[0] == \
+        "target-not-float"
+    local = ('<Int32 name="n" valueReference="9" causality="input" start="0"/>'
+             '<Float64 name="dn" valueReference="10" derivative="9"/>')
+    assert parts("DAE509", ctx_of(variables=VARIABLES + local)) == ["target-not-float"]
+    assert parts("DAE509", ctx_of(variables=VARIABLES.replace(' derivative="2"', ""))) == [
+        "csd-without-derivative"]
+    discrete = VARIABLES.replace('initial="exact" start="1"',
+                                 'variability="discrete" initial="exact" start="1"')
+    assert parts("DAE509", ctx_of(variables=discrete)) == ["not-continuous"]
+    twice = STRUCTURE + '<ContinuousStateDerivative valueReference="3"/>'
+    assert parts("DAE509", ctx_of(structure=twice)) == ["state-listed-twice"]
+
+
+def test_output_duplicate_part():
+    structure = ('<Output valueReference="8"/><Output valueReference="8"/>'
+                 '<Output valueReference="4"/>') + STRUCTURE.split("/>", 1)[1]
+    found = {v.subject: v.part for v in run("DAE511", ctx_of(structure=structure))}
+    assert found == {"v": "duplicate", "y": None}
+
+
+def test_initial_unknown_parts():
+    variables = VARIABLES + '<Float64 name="e" valueReference="9"/>'
+    structure = STRUCTURE + ('<EventIndicator valueReference="9"/>'
+                             '<InitialUnknown valueReference="9"/>'
+                             '<InitialUnknown valueReference="4"/>'
+                             '<InitialUnknown valueReference="3"/>')
+    found = [(v.subject, v.part) for v in run("DAE513", ctx_of(variables=variables,
+                                                                  structure=structure))]
+    assert found == [("e", "event-indicator-listed"), ("y", None), ("der(x)", "duplicate")]
+
+
+def test_nominal_not_positive_part():
+    from conformance.checks import attribute_values
+    variables = (VARIABLES.replace('initial="exact" start="1"',
+                                   'initial="exact" start="1" nominal="0"')
+                 .replace('name="g1" valueReference="6"', 'name="g1" valueReference="6" '
+                          'nominal="-1"'))
+    found = {v.subject: v.part
+             for v in attribute_values.nominal_not_positive(ctx_of(variables=variables))}
+    assert found == {"x": None, "g1": "not-a-state"}

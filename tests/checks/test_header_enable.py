@@ -363,3 +363,65 @@ def test_no_manifest_or_model_means_no_findings():
     for check in (header.ls_name_mismatch, header.ls_version_invalid,
                   header.ls_description_mismatch, *ENABLE_RULES):
         assert run(check, empty) == []
+
+
+# ---------------------------------------------------------------------------- parts
+# A sub-check whose basis differs from the rule's carries its part ([[rule.parts]]); the rule's
+# own case carries none.
+def test_header_parts():
+    for check in (header.ls_name_mismatch, header.ls_version_invalid,
+                  header.ls_description_mismatch):
+        for context in (ctx(alpha1(name="", version="", description="")),
+                        ctx(alpha1(name='fmi-ls-name="org.fmi-standard.fmi-ls-dae"',
+                                   version='fmi-ls-version="1.0.0-alpha.1"',
+                                   description='fmi-ls-description="x"'))):
+            assert [v.part for v in run(check, context)] == ["missing-or-unqualified"]
+    wrong_name = 'fmi-ls:fmi-ls-name="fmi-ls-dae"'
+    assert [v.part for v in run(header.ls_name_mismatch, ctx(alpha1(name=wrong_name)))] == [None]
+    legacy_name = formulation().replace(NAME, wrong_name)
+    assert [v.part for v in run(header.ls_name_mismatch,
+                                ctx(legacy_name, draft="formulation"))] == ["legacy-shape-name"]
+    for version, part in (("draft", "legacy-not-version-like"), ("", None)):
+        context = ctx(formulation(version=f'fmi-ls:fmi-ls-version="{version}"'),
+                      draft="formulation")
+        assert [v.part for v in run(header.ls_version_invalid, context)] == [part]
+    assert [v.part for v in run(header.ls_version_invalid, ctx(alpha1(
+        version='fmi-ls:fmi-ls-version="0.1"')))] == [None]
+    legacy_text = formulation().replace(DESCRIPTION, 'fmi-ls:fmi-ls-description="DAE"')
+    assert [v.part for v in run(header.ls_description_mismatch,
+                                ctx(legacy_text, draft="formulation"))] == ["legacy-shape-text"]
+    assert [v.part for v in run(header.ls_description_mismatch, ctx(alpha1(
+        description='fmi-ls:fmi-ls-description="DAE"')))] == [None]
+
+
+@pytest.mark.parametrize("enable_xml,part", [
+    ('<EnableDAEParameter valueReference="99"/>', None),
+    ('<EnableDAEParameter valueReference="x1"/>', "missing-or-not-integer"),
+    ("<EnableDAEParameter/>", "missing-or-not-integer"),
+])
+def test_unknown_vr_parts(enable_xml, part):
+    found = run(enable.enable_parameter_unknown_vr, ctx(alpha1(enable_xml=enable_xml)))
+    assert [v.part for v in found] == [part]
+
+
+def test_enable_parts():
+    by_name = ctx(formulation(root_attrs='enableDAEModeVariable="ODE_DAE_Switch"'),
+                  draft="formulation")
+    assert [v.part for v in run(enable.enable_parameter_unknown_vr, by_name)] == \
+        ["legacy-name-reference"]
+    for start, part in (("-", "start-missing"), ("true", None)):
+        found = run(enable.enable_parameter_start_not_false,
+                    ctx(alpha1(), model(dae_var=_var(start=start))))
+        assert [v.part for v in found] == [part]
+    extra = '<Float64 name="a" valueReference="8"><Dimension valueReference="1"/></Float64>'
+    assert [v.part for v in run(enable.enable_parameter_not_scalar,
+                                ctx(alpha1(), model(extra=extra)))] == ["referenced-by-dimension"]
+    assert [v.part for v in run(enable.enable_parameter_not_scalar, ctx(alpha1(), model(
+        dae_var=_var(body='<Dimension start="2"/>'))))] == [None]
+    two = ENABLE + '\n  <EnableDAEParameter valueReference="1"/>'
+    assert [v.part for v in run(enable.enable_parameter_duplicate,
+                                ctx(alpha1(enable_xml=two)))] == [None]
+    legacy = ctx(formulation(enable_xml='<EnableDAE valueReference="1"/>',
+                             root_attrs='enableDAEModeVariable="dae"'), draft="formulation")
+    assert [v.part for v in run(enable.enable_parameter_duplicate, legacy)] == \
+        ["legacy-element-plus-attribute"]

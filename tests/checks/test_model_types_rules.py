@@ -215,3 +215,44 @@ def test_large_model_is_clean(naming):
                       'displayUnit="km"><Alias name="der(block9.y)"')
     result = found(ctx_of(bad, definitions=defined, naming=naming))
     assert set(result) == ({"DAE532", "DAE534"} if naming == "structured" else {"DAE532"})
+
+
+# -- parts: the sub-checks whose basis differs carry their catalogue part ----------------------
+
+def parts(ctx: CheckContext, code: str) -> dict:
+    return {v.subject: v.part for v in found(ctx).get(code, ())}
+
+
+def test_unit_and_display_unit_parts():
+    defined = UNITS + ('<TypeDefinitions><Float64Type name="T" unit="K"/>'
+                       '<Float64Type name="U" unit="m" displayUnit="km"/>'
+                       '<Float64Type name="V" displayUnit="mm"/></TypeDefinitions>')
+    var = ('<Float64 name="x" valueReference="2" unit="K"/>'
+           '<Float64 name="y" valueReference="3" unit="m" displayUnit="km">'
+           '<Alias name="ya" displayUnit="cm"/></Float64>'
+           '<Float64 name="z" valueReference="4" displayUnit="mm"><Alias name="za" '
+           'displayUnit="mm"/></Float64>')
+    ctx = ctx_of(var, definitions=defined)
+    assert parts(ctx, "DAE531") == {"T": "type-definition-unit", "x": None}
+    assert parts(ctx, "DAE532") == {"U": "type-definition", "V": "no-unit", "y": None,
+                                    "ya": "alias", "z": "no-unit", "za": "alias"}
+
+
+def test_empty_name_part():
+    var = ('<Float64 name="" valueReference="2"/><Float64 name="a&#9;b" valueReference="3">'
+           '<Alias name=""/></Float64>')
+    assert [v.part for v in found(ctx_of(var, naming="flat"))["DAE533"]] == [
+        "empty", None, "empty"]
+
+
+@pytest.mark.parametrize("var, part", [
+    ('<Float64 name="v" valueReference="2"><Dimension start="0"/></Float64>', None),
+    ('<Float64 name="v" valueReference="2"><Dimension start="2" valueReference="0"/></Float64>',
+     "both"),
+    ('<Float64 name="v" valueReference="2"><Dimension/></Float64>', "neither"),
+    ('<Float64 name="v" valueReference="2"><Dimension valueReference="99"/></Float64>',
+     "unknown-vr"),
+    ('<Float64 name="v" valueReference="2"><Dimension valueReference="1"/></Float64>', "target"),
+])
+def test_dimension_parts(var, part):
+    assert parts(ctx_of(var), "DAE536") == {"v": part}

@@ -1,6 +1,7 @@
 """Unit tests of the DAE model-structure rules (DAE420-DAE426) and index 1 (DAE601)."""
 from __future__ import annotations
 
+import sys
 
 import pytest
 from lxml import etree
@@ -472,3 +473,59 @@ def test_index1_matches_the_bench_generator():
     man = read_manifest(etree.ElementTree(etree.fromstring(manifest_xml(m).encode())),
                         draft="alpha1")
     assert _run("DAE601", CheckContext(md, man, "alpha1")) == []
+
+
+# --- parts (catalogue [[rule.parts]]): the sub-check a violation is ---------------------------
+
+# a discrete local (a discrete-time state of FMI 3.0.2 §2.1) and a discrete output
+_DISCRETE = """
+    <Float64 name="xd" valueReference="30" variability="discrete" initial="exact" start="0"/>
+    <Float64 name="yd" valueReference="31" causality="output" variability="discrete"/>
+"""
+
+
+@pytest.mark.parametrize("code, structure, parts", [
+    ("DAE420", '<Residual valueReference="6" dependencies="4 99"/>', [None]),
+    ("DAE420", '<Output valueReference="14" dependencies="99"/>'
+               '<ContinuousStateDerivative valueReference="3" dependencies="98"/>'
+               '<InitialUnknown valueReference="4" dependencies="97"/>'
+               '<EventIndicator valueReference="12" dependencies="96"/>',
+     ["core-element-dependency"] * 4),
+    ("DAE421", '<Residual valueReference="6" dependencies="4 5 12"/>', [None]),
+    ("DAE421", '<Residual valueReference="6" dependencies="4 5 30"/>', [None]),
+    ("DAE421", '<Output valueReference="14" dependencies="12"/>', ["output-or-derivative-known"]),
+    ("DAE421", '<Output valueReference="14" dependencies="31"/>', ["output-or-derivative-known"]),
+    ("DAE421", '<ContinuousStateDerivative valueReference="3" dependencies="3"/>',
+     ["output-or-derivative-known"]),
+    ("DAE421", '<Output valueReference="14" dependencies="30"/>', ["discrete-time-state-known"]),
+    ("DAE421", '<ContinuousStateDerivative valueReference="3" dependencies="30"/>',
+     ["discrete-time-state-known"]),
+    ("DAE421", '<InitialUnknown valueReference="4" dependencies="3 12"/>',
+     ["initial-unknown-known"] * 2),
+    ("DAE424", '<InitialUnknown valueReference="12"/><InitialUnknown valueReference="8"/>',
+     [None, None]),
+    ("DAE424", '<EventIndicator valueReference="12"/><InitialUnknown valueReference="12"/>',
+     ["event-indicator"]),
+    ("DAE424", '<Residual valueReference="6"/><InitialUnknown valueReference="6"/>', [None]),
+    ("DAE424", '<Residual valueReference="14"/><InitialUnknown valueReference="14"/>',
+     ["output-residual"]),
+    ("DAE424", '<Residual valueReference="15"/><InitialUnknown valueReference="15"/>', [None]),
+    ("DAE424", '<InitialUnknown valueReference="55"/>', ["unresolved"]),
+    ("DAE425", '<ContinuousStateDerivative valueReference="19"/>', [None, None]),
+    ("DAE425", '<ContinuousStateDerivative valueReference="3"/>'
+               '<ContinuousStateDerivative valueReference="12"/>'
+               '<ContinuousStateDerivative valueReference="88"/>',
+     ["no-derivative-attribute", "unresolved"]),
+    ("DAE426", '<Output valueReference="10"/><Output valueReference="14"/>'
+               '<Output valueReference="15"/><Output valueReference="31"/>'
+               '<Output valueReference="44"/>', [None]),
+])
+def test_part_of_violation(code, structure, parts, monkeypatch):
+    monkeypatch.setattr(sys.modules[__name__], "VARIABLES", VARIABLES + _DISCRETE)
+    assert [v.part for v in _run(code, _ctx(structure))] == parts
+
+
+def test_event_indicator_of_model_description_when_the_manifest_lists_none():
+    ctx = _ctx('<InitialUnknown valueReference="12"/>',
+               md_structure=MD_STRUCTURE + '<EventIndicator valueReference="12"/>')
+    assert [v.part for v in _run("DAE424", ctx)] == ["event-indicator"]

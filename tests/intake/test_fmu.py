@@ -520,6 +520,53 @@ def test_limits_from_options_rejects_nonsense() -> None:
     assert ArchiveLimits.from_options({**options, "max_member": 7, "other": 1}).max_member == 7
 
 
+# -- parts: the sub-checks whose basis differs from the rule's ([[rule.parts]]) --------------------
+
+
+@pytest.mark.parametrize("name,part", [
+    ("../evil.txt", None), ("/etc/evil.txt", None), ("C:\\evil.txt", None),   # fmusim rejects
+    ("dir\\evil.txt", None), ("./a/../evil.txt", None),
+    ("a/../../evil.txt", "other-unsafe-name"), ("C:/evil.txt", "other-unsafe-name"),
+    ("c:evil.txt", "other-unsafe-name"), ("nul\x00.txt", "other-unsafe-name"),
+    ("ctl\x1b[31m.txt", "other-unsafe-name"),
+])
+def test_unsafe_names_fmusim_accepts_are_a_part(tmp_path: Path, name: str, part) -> None:
+    placeholder = name.replace("\x00", "_")
+    fmu = make_zip(tmp_path / "m.fmu", [(MODEL_DESCRIPTION, MD), (placeholder, b"payload")])
+    if placeholder != name:
+        patch_entry(fmu, placeholder, new_name=name.encode())
+    source, violations = open_fmu(fmu)
+    assert [(v.rule, v.part) for v in violations] == [("unsafe-archive-path", part)]
+    source.close()
+
+
+@pytest.mark.parametrize("name,patch,rule,part", [
+    ("link", {"external_attr": 0o120777 << 16}, "unsafe-archive-path", "link-entry"),
+    ("dev", {"external_attr": 0o020644 << 16}, "unsafe-archive-path", "special-file"),
+    ("secret.bin", {"flags": 0x1}, "archive-unreadable", "encrypted-entry"),
+    ("odd.bin", {"method": 98}, "archive-unreadable", "undecodable-method"),
+])
+def test_entry_sub_checks_carry_their_part(tmp_path: Path, name, patch, rule, part) -> None:
+    fmu = make_zip(tmp_path / "m.fmu", [(MODEL_DESCRIPTION, MD), (name, b"x" * 50)],
+                   method=zipfile.ZIP_STORED)
+    patch_entry(fmu, name, **patch)
+    source, violations = open_fmu(fmu)
+    assert [v.part for v in by_rule(violations, rule)] == [part]
+    assert [v.part for v in by_rule(violations, "archive-compression-method")] in ([], [None])
+    source.close()
+
+
+def test_archive_sub_checks_carry_their_part(tmp_path: Path) -> None:
+    _, missing = open_fmu(tmp_path / "does-not-exist.fmu")
+    assert [v.part for v in missing] == ["path-or-system-error"]
+    (tmp_path / "s.fmu").write_bytes(b"PK\x07\x08" + bytes(60))
+    _, split = open_fmu(tmp_path / "s.fmu")
+    assert [v.part for v in split] == ["split-or-spanned"]
+    (tmp_path / "r.fmu").write_bytes(MD)
+    _, not_zip = open_fmu(tmp_path / "r.fmu")
+    assert [v.part for v in not_zip] == [None]   # the rule's own case
+
+
 # -- never raises ---------------------------------------------------------------------------------
 
 

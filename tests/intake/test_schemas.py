@@ -329,3 +329,47 @@ def test_catalogue_examples(name: str, kind: str, text: str) -> None:
         "draft-unrecognised": bool(list(detect.unrecognised_violations(root, file="m.xml"))),
     }
     assert fired == {rule: (rule == name and kind == "bad") for rule in fired}
+
+
+# --------------------------------------------------------------------------------------------
+# parts ([[rule.parts]] of schema-violation)
+
+
+def test_manifest_errors_carry_the_part_of_their_schema() -> None:
+    broken = (DATA / "alpha1.xml").read_text().replace(
+        '<AlgebraicVariable valueReference="5"/>', '<AlgebraicVariable valueReference="five"/>')
+    assert [v.part for v in manifest_violations(parse_text(broken.split("?>", 1)[1]))] == \
+        ["alpha1-manifest"]
+    text = (DATA / "alpha1.xml").read_text().replace(
+        "<fmiDAEManifest ", '<fmiDAEManifest xmlns="http://fmi-standard.org/fmi-ls-manifest" ')
+    assert [v.part for v in manifest_violations(parse_text(text.split("?>", 1)[1]))] == \
+        ["alpha1-manifest"]
+    assert [v.part for v in manifest_violations(parse_file("alpha1.xml"), detect.FORMULATION)] \
+        == ["legacy-draft-schema"]
+    legacy = (DATA / "formulation-default-ns.xml").read_text().replace(
+        '<AlgebraicVariable valueReference="5"/>', '<AlgebraicVariable valueReference="-5"/>')
+    assert {v.part for v in manifest_violations(parse_text(legacy.split("?>", 1)[1]))} == \
+        {"legacy-draft-schema"}
+    assert {v.part for v in md_violations(MODEL_DESCRIPTION.replace(
+        'causality="local" start="1"', 'causality="nonsense" start="1"'))} == {None}
+
+
+@pytest.mark.parametrize(("old", "new", "part"), [
+    ('<EnableDAEParameter valueReference="1"/>',
+     '<EnableDAEParameter valueReference="1" dependencies="2"/>', "beyond-published-xsd"),
+    ('<AlgebraicVariable valueReference="4"/>',
+     '<AlgebraicVariable valueReference="4" dependenciesKind="constant"/>', "beyond-published-xsd"),
+    ('<AlgebraicVariable valueReference="4"/>',
+     '<AlgebraicVariable valueReference="4"><Annotations/></AlgebraicVariable>',
+     "beyond-published-xsd"),
+    ('<AlgebraicVariable valueReference="4"/>',
+     '<AlgebraicVariable valueReference="4" nominal="8"/>', "alpha1-manifest"),
+    ('<AlgebraicVariable valueReference="4"/>',
+     '<AlgebraicVariable valueReference="4"><Bogus/></AlgebraicVariable>', "alpha1-manifest"),
+])
+def test_what_only_lsdaes_stricter_alpha1_schema_rejects_is_a_part(old: str, new: str,
+                                                                    part: str) -> None:
+    text = (DATA / "alpha1.xml").read_text()
+    assert old in text
+    found = manifest_violations(parse_text(text.replace(old, new).split("?>", 1)[1]))
+    assert [v.part for v in found] == [part]

@@ -270,3 +270,25 @@ def test_an_unknown_undeclared_prefix_is_not_guessed() -> None:
     data = b'<root foo:a="1"/>'
     tree, violations = parse_xml(data, file="m.xml", bind_prefixes=True)
     assert tree is None and rules_of(violations) == {"xml-not-well-formed"}
+
+
+def test_an_undeclared_known_prefix_in_a_manifest_is_a_part() -> None:
+    """[[rule.parts]] undeclared-fmi-ls-prefix: a layered-standard manifest (fmi-ls-manifest.xml)
+    that uses a known prefix without declaring it; elsewhere, or an unknown prefix, the rule's
+    own case."""
+    data = GOOD.replace(b' xmlns:fmi-ls="http://fmi-standard.org/fmi-ls-manifest"', b"")
+    manifest = "extra/org.fmi-standard.fmi-ls-dae/fmi-ls-manifest.xml"
+    for bind in (False, True):
+        _, violations = parse_xml(data, file=manifest, bind_prefixes=bind)
+        assert [v.part for v in violations] == ["undeclared-fmi-ls-prefix"]
+    _, violations = parse_xml(data, file="modelDescription.xml")
+    assert [v.part for v in violations] == [None]
+    _, violations = parse_xml(b'<root foo:a="1"/>', file=manifest)
+    assert [v.part for v in violations] == [None]
+
+
+def test_a_missing_declaration_is_a_part() -> None:
+    _, violations = parse_xml(b"<a/>", file="modelDescription.xml", require_declaration=True)
+    assert [(v.rule, v.part) for v in violations] == [("xml-encoding", "declaration-missing")]
+    _, violations = parse_xml(b'<?xml version="1.0" encoding="ISO-8859-1"?><a/>', file="x.xml")
+    assert [(v.rule, v.part) for v in violations] == [("xml-encoding", None)]

@@ -80,3 +80,16 @@ HAVE_NOTHING = {"model-description": True, "manifest": False, "dae-layer": False
 ])
 def test_skip_reason(needs, have, reason):
     assert skip_reason(needs, have) == reason
+
+
+def test_manifest_missing_is_a_part_when_files_of_the_layer_folder_show_the_layer():
+    """[[rule.parts]] layer-folder-without-manifest: alpha.1 requires the manifest once the
+    layer's folder is there; a plain FMU, or a variable named like the switch, stays the rule's
+    own (info) case."""
+    from conformance.model.layer import manifest_missing
+
+    folder = ["extra/org.fmi-standard.fmi-ls-dae/notes.txt"]
+    assert manifest_missing(model(), folder).part == "layer-folder-without-manifest"
+    assert manifest_missing(model(), []).part is None
+    switch = model(variables=SWITCH.format("enableDAEModeParameter"))
+    assert manifest_missing(switch, []).part is None

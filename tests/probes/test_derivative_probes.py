@@ -264,6 +264,7 @@ def test_wrong_directional_entry_is_a_directional_mismatch():
     assert set(result) == {"DAE740"}
     (v,) = result["DAE740"]
     assert v.subject == "d(der(x1))/d(x1)"
+    assert v.part == "dae-mode"     # fmi-ls-dae 3.4: residuals and algebraic variables
     ev = dict(v.evidence)
     assert ev["fmu"] == pytest.approx(-ev["finite_difference"], rel=1e-6)
     assert ev["tolerance"] > 0 and ev["error_estimate"] >= 0
@@ -362,6 +363,7 @@ def test_missing_dependency_is_undeclared():
     result = found(ctx)
     assert set(result) == {"DAE742"}
     assert [v.subject for v in result["DAE742"]] == ["d(__residual1)/d(z2)"]
+    assert [v.part for v in result["DAE742"]] == ["residual-dependencies"]
 
 
 def test_undeclared_inputs_of_the_residuals_do_not_leak_into_the_outputs_adjoint():
@@ -410,6 +412,7 @@ def test_missing_dependency_hidden_behind_a_declared_column_is_found():
     result = found(ctx)
     assert set(result) == {"DAE742"}
     assert [v.subject for v in result["DAE742"]] == ["d(der(y1))/d(y3)"]
+    assert [v.part for v in result["DAE742"]] == [None]    # the core's promise, not a residual
 
 
 def test_extra_dependency_is_never_observed():
@@ -421,6 +424,18 @@ def test_extra_dependency_is_never_observed():
     result = found(ctx)
     assert set(result) == {"DAE743"}
     assert [v.subject for v in result["DAE743"]] == ["d(y1)/d(x2)"]
+    assert [v.part for v in result["DAE743"]] == [None]
+
+
+def test_time_listed_but_never_observed_is_its_part():
+    ctx = make_ctx("SimpleDAE", manifest_edits=[(
+        '<Output valueReference="9" dependencies="1 5 7 8" dependenciesKind="dependent '
+        'dependent dependent dependent"/>',
+        '<Output valueReference="9" dependencies="0 1 5 7 8" dependenciesKind="dependent '
+        'dependent dependent dependent dependent"/>')])
+    result = found(ctx)
+    assert set(result) == {"DAE743"}
+    assert [(v.subject, v.part) for v in result["DAE743"]] == [("d(y1)/d(time)", "time-listed")]
 
 
 def test_constant_on_a_nonlinear_term_violates_the_kind():
@@ -483,6 +498,7 @@ def test_refused_directional_derivative_is_reported_once():
     assert set(result) == {"DAE740"}
     assert len(result["DAE740"]) == 1
     assert dict(result["DAE740"][0].evidence)["status"] == "fmi3Error"
+    assert result["DAE740"][0].part == "refused-in-dae-mode"
 
 
 def test_probe_errors_are_published_for_mismatches():
@@ -570,3 +586,4 @@ def test_variable_dependencies_reported_by_the_fmu_are_checked_against_the_manif
     (v,) = result["DAE742"]
     assert v.subject == "d(y1)/d(x2)"
     assert dict(v.evidence)["source"] == "fmi3GetVariableDependencies"
+    assert v.part == "reported-dependencies-dae-mode"

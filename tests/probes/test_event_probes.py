@@ -117,6 +117,7 @@ def test_a_crash_on_an_illegal_call_is_the_binarys_crash_after_every_other_probe
     assert [f.code for f in report.findings] == ["DAE701"], report.findings
     assert crashes[0]["call"] in ("fmi3GetDirectionalDerivative", "fmi3GetAdjointDerivative")
     assert crashes[0]["probe"] == "DAE739"
+    assert report.findings[0].part == "crash-on-illegal-call"
     # every other probe ran first, on a binary that had not crashed yet
     assert {"DAE734", "DAE738", "DAE740", "DAE741", "DAE801", "DAE805"} <= set(report.rules_run)
 

@@ -26,6 +26,13 @@ OPTIONS = {r.code: r.option_values for r in default_catalogue()}
 FAMILY = {**importer_paths.PROBES, **event_indicators.PROBES}
 
 
+@pytest.fixture(autouse=True)
+def _count_on_a_fake(monkeypatch):
+    """fmi3GetNumberOfEventIndicators is asked on a fresh instance in Instantiated, made from
+    the loaded library: here a fake instance stands in for it."""
+    monkeypatch.setattr(event_indicators, "_instantiated", lambda ctx: ctx.new_instance("dae"))
+
+
 class Fake:
     """An instance of a linear model in DAE mode: every unknown is a weighted sum of the
     states, algebraic variables and inputs the equations see; indicators likewise."""
@@ -144,6 +151,18 @@ def test_each_fault_triggers_exactly_its_rule(fault, code):
     result = found(make_ctx("EventDAE", fault))
     assert set(result) == {code}, result
     assert len(result[code]) == 1
+
+
+@pytest.mark.parametrize("fault, code, part", [
+    ("count", "DAE732", None),
+    ("indicators-fail", "DAE732", None),
+    ("indicators-nan", "DAE732", "not-finite"),
+    ("stale", "DAE733", None),
+    ("vector-differs", "DAE733", "vector-vs-variables"),
+])
+def test_each_fault_is_tagged_with_its_part(fault, code, part):
+    (violation,) = found(make_ctx("EventDAE", fault))[code]
+    assert violation.part == part
 
 
 def test_a_state_that_reads_back_but_is_unused_names_the_values_that_differ():

@@ -250,6 +250,7 @@ def test_hidden_dependency_behind_a_declared_column_is_found():
     assert [(v.subject, dict(v.evidence)["mode"], v.location.file) for v in result["DAE750"]] \
         == [("d(y)/d(p)", "DAE mode", ctx.manifest.file),
             ("d(y)/d(p)", "ODE mode", ctx.model.file)]
+    assert [v.part for v in result["DAE750"]] == ["dae-mode", None]   # the manifest's list
 
 
 @pytest.mark.parametrize("where", ["manifest", "model", "both"])

@@ -250,3 +250,17 @@ def test_an_fmu_whose_binary_was_not_checked_says_why():
     assert page.count("Binary not checked:") == 1
     section = page[page.index('id="fmu-2"'):]
     assert "Binary not checked:</strong> no binary for x86_64-linux" in section
+
+
+def test_each_finding_shows_the_basis_its_severity_rests_on():
+    """Issue 29: the rule's basis, or the basis of the finding's part when it has one."""
+    from html import escape
+
+    rule = CATALOGUE["unsafe-archive-path"]
+    part = rule.parts[0]
+    findings = (_finding(rule.code, rule.severity, "an absolute name", subject="/etc/x"),
+                _finding(rule.code, part.severity, "a link", subject="l", part=part.part))
+    page = render(Report("0.1", (FmuReport("a.fmu", "alpha1", findings),)), CATALOGUE,
+                  run=RunInfo())
+    assert escape(f"{rule.basis.describe()} ({rule.severity})") in page
+    assert escape(f"{part.describe()} ({part.severity})") in page

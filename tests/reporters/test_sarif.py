@@ -147,6 +147,21 @@ def test_rules_come_from_the_catalogue_with_docs_and_spec():
     assert rules[ids.index("DAE091")]["defaultConfiguration"] == {"level": "note"}
 
 
+def test_rule_help_shows_the_basis_of_the_rule_and_of_each_part():
+    """Issue 29: SARIF's rule help says what the verdict rests on, parts included."""
+    catalogue = default_catalogue()
+    rules = {r["id"]: r for r in json.loads(sarif.render(sample_report(), catalogue))
+             ["runs"][0]["tool"]["driver"]["rules"]}
+    rule = catalogue["unsafe-archive-path"]
+    help_ = rules[rule.code]["help"]
+    assert f"Basis: {rule.basis.describe()}" in help_["text"]
+    for part in rule.parts:
+        assert f"Part {part.part} ({part.what}, {part.severity}): {part.describe()}" in \
+            help_["text"]
+    assert rule.basis.describe() in help_["markdown"]
+    assert rules[rule.code]["properties"]["basis"] == rule.basis.kind
+
+
 def test_docs_anchor_matches_the_generated_rule_docs():
     docs = (Path(__file__).resolve().parents[2] / "docs" / "rules.md").read_text("utf-8")
     rule = default_catalogue()["DAE203"]

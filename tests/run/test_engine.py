@@ -166,3 +166,23 @@ def test_an_fmi2_fmu_is_one_warning_and_not_checked(tmp_path, capsys):
     assert main(["check", str(path), "--color", "never"]) == 0
     out = capsys.readouterr().out
     assert "not checked" in out and "schema-violation" not in out
+
+
+def test_an_fmi2_fmu_with_the_dae_layer_is_the_part(tmp_path):
+    """[[rule.parts]] fmi2-with-dae-layer: an FMI 1.0/2.0 FMU that carries files of
+    extra/org.fmi-standard.fmi-ls-dae/ claims a layered standard of FMI 3.0; without them it is
+    the rule's own (info) case. Same message, location and evidence either way."""
+    from tests.fixtures import all_cases
+
+    case = next(c for c in all_cases() if c.id == "DAE092/fail")
+    plain = materialise(case, tmp_path / "plain")
+    (plain_finding,) = check_fmu(plain, options=EngineOptions(probes=False)).findings
+    assert plain_finding.part is None
+    layered = materialise(case, tmp_path / "layered")
+    manifest = layered / "extra" / "org.fmi-standard.fmi-ls-dae" / "fmi-ls-manifest.xml"
+    manifest.parent.mkdir(parents=True)
+    manifest.write_text("<fmiDAEManifest/>")
+    (finding,) = check_fmu(layered, options=EngineOptions(probes=False)).findings
+    assert finding.part == "fmi2-with-dae-layer"
+    assert (finding.message, finding.location, finding.evidence) == \
+        (plain_finding.message, plain_finding.location, plain_finding.evidence)

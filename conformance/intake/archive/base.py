@@ -12,7 +12,7 @@ import re
 import unicodedata
 from collections.abc import Mapping
 from dataclasses import dataclass, fields
-from typing import Any
+from typing import Any, NamedTuple
 
 from conformance.report.findings import Location, Violation, evidence
 
@@ -65,9 +65,11 @@ class Member:
     executable: bool = False
 
 
-def archive_violation(rule: str, message: str, **ev: Any) -> Violation:
-    """A violation about the FMU as a whole."""
-    return Violation(message, Location(), evidence(ev), rule=rule)
+def archive_violation(rule: str, message: str, *, part: str | None = None,
+                      **ev: Any) -> Violation:
+    """A violation about the FMU as a whole; ``part`` names the sub-check of ``rule`` (catalogue
+    ``[[rule.parts]]``), if any."""
+    return Violation(message, Location(), evidence(ev), rule=rule, part=part)
 
 
 def show_name(name: str, limit: int = 200) -> str:
@@ -83,8 +85,29 @@ def normalise_name(name: str) -> str:
     return "/".join(p for p in name.split("/") if p not in ("", "."))
 
 
-def unsafe_reason(raw: str) -> str | None:
-    """Why an entry name is unsafe to extract or ambiguous between platforms, or None."""
+class Unsafe(NamedTuple):
+    """Why an entry name is unsafe, and the part of ``unsafe-archive-path`` it falls under."""
+
+    reason: str
+    part: str | None = None
+
+
+def unsafe_reason(raw: str) -> Unsafe | None:
+    """Why an entry name is unsafe to extract or ambiguous between platforms, or None.
+
+    A name fmusim rejects too (it starts with '.' or '/' or contains a backslash) is the rule's
+    own case; any other unsafe name (a drive letter, an inner '..', NUL or control characters,
+    an empty name) is the part ``other-unsafe-name``.
+    """
+    reason = _unsafe_text(raw)
+    if reason is None:
+        return None
+    if raw.startswith((".", "/")) or "\\" in raw:
+        return Unsafe(reason)
+    return Unsafe(reason, part="other-unsafe-name")
+
+
+def _unsafe_text(raw: str) -> str | None:
     if raw in ("", "/"):
         return "has an empty name"
     if "\x00" in raw:

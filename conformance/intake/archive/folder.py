@@ -38,7 +38,7 @@ def scan_folder(path: Path, limits: ArchiveLimits) -> ScanResult:
                 entries = sorted(it, key=lambda e: e.name)
         except OSError as exc:
             inv.report(UNREADABLE, f"{{subject}} cannot be listed: {describe_error(exc)}",
-                       rel_dir or ".")
+                       rel_dir or ".", part="path-or-system-error")
             continue
         for entry in entries:
             count += 1
@@ -48,22 +48,24 @@ def scan_folder(path: Path, limits: ArchiveLimits) -> ScanResult:
             try:
                 _inspect_folder_entry(inv, root, rel, entry, pending)
             except OSError as exc:
-                inv.exclude(UNREADABLE, f"{{subject}} cannot be read: {describe_error(exc)}", rel)
+                inv.exclude(UNREADABLE, f"{{subject}} cannot be read: {describe_error(exc)}", rel,
+                            part="path-or-system-error")
     inv.finish()
     return ScanResult("folder", inv.violations, inv.members, inv.excluded, root=root)
 
 
 def _inspect_folder_entry(inv: Inventory, root: str, rel: str, entry: os.DirEntry[str],
                           pending: list[str]) -> None:
-    reason = unsafe_reason(entry.name)
-    if reason:
-        inv.exclude(UNSAFE_PATH, "{subject} " + reason, rel)
+    unsafe = unsafe_reason(entry.name)
+    if unsafe:
+        inv.exclude(UNSAFE_PATH, "{subject} " + unsafe.reason, rel, part=unsafe.part)
         return
     if entry.is_symlink():
         target = os.path.realpath(entry.path)
         if not is_within(target, root):
             inv.exclude(UNSAFE_PATH, "{subject} is a symbolic link to a place outside the FMU "
-                        "folder; it is never followed", rel, target=show_name(target))
+                        "folder; it is never followed", rel, target=show_name(target),
+                        part="link-entry")
         elif os.path.isfile(target):
             st = os.stat(target)
             inv.total += st.st_size
@@ -78,7 +80,7 @@ def _inspect_folder_entry(inv: Inventory, root: str, rel: str, entry: os.DirEntr
     st = entry.stat(follow_symlinks=False)
     if not stat.S_ISREG(st.st_mode):
         inv.exclude(UNSAFE_PATH, "{subject} is a special file (device, FIFO or socket), not a "
-                    "regular file", rel, mode=oct(st.st_mode))
+                    "regular file", rel, mode=oct(st.st_mode), part="special-file")
         return
     inv.total += st.st_size
     inv.add(rel, st.st_size, entry.path, executable=bool(st.st_mode & 0o111))

@@ -58,11 +58,13 @@ class Inventory:
         self.violations: list[Violation] = []
         self.total = 0
 
-    def report(self, rule: str, message: str, raw: str, **ev: Any) -> None:
-        self.violations.append(_member_violation(rule, message, raw, **ev))
+    def report(self, rule: str, message: str, raw: str, *, part: str | None = None,
+               **ev: Any) -> None:
+        self.violations.append(_member_violation(rule, message, raw, part=part, **ev))
 
-    def exclude(self, rule: str, message: str, raw: str, **ev: Any) -> None:
-        self.report(rule, message, raw, **ev)
+    def exclude(self, rule: str, message: str, raw: str, *, part: str | None = None,
+                **ev: Any) -> None:
+        self.report(rule, message, raw, part=part, **ev)
         self.excluded[show_name(raw)] = rule
 
     def add(self, raw: str, size: int, ref: Any, *, executable: bool) -> None:
@@ -112,6 +114,8 @@ def too_many(count: int, limits: ArchiveLimits) -> Violation:
                              entries=count, limit=limits.max_members)
 
 
-def _member_violation(rule: str, message: str, name: str, **ev: Any) -> Violation:
+def _member_violation(rule: str, message: str, name: str, *, part: str | None = None,
+                      **ev: Any) -> Violation:
     """A violation about one entry; its (escaped) name is the subject, so the engine can group."""
-    return Violation(message, Location(), evidence(ev), subject=show_name(name), rule=rule)
+    return Violation(message, Location(), evidence(ev), subject=show_name(name), rule=rule,
+                     part=part)

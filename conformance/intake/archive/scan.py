@@ -31,10 +31,11 @@ def scan(path: Path, limits: ArchiveLimits) -> ScanResult:
         st = os.stat(path)
     except FileNotFoundError:
         return unusable(archive_violation(UNREADABLE, "the FMU does not exist (no such file or "
-                                                      "folder)"))
+                                                      "folder)", part="path-or-system-error"))
     except OSError as exc:
         return unusable(archive_violation(UNREADABLE,
-                                          f"the FMU cannot be accessed: {describe_error(exc)}"))
+                                          f"the FMU cannot be accessed: {describe_error(exc)}",
+                                          part="path-or-system-error"))
     if stat.S_ISDIR(st.st_mode):
         return scan_folder(path, limits)
     if not stat.S_ISREG(st.st_mode):
@@ -47,7 +48,8 @@ def scan(path: Path, limits: ArchiveLimits) -> ScanResult:
         head = fh.read(4)
     if head == b"PK\x07\x08":
         return unusable(archive_violation(UNREADABLE, "the FMU is a split or spanned ZIP "
-                                                      "archive, which FMI does not allow (AR-02)"))
+                                                      "archive, which FMI does not allow (AR-02)",
+                                          part="split-or-spanned"))
     if head not in (b"PK\x03\x04", b"PK\x05\x06"):
         hint = " (it looks like XML)" if head.lstrip().startswith(b"<") else ""
         return unusable(archive_violation(

@@ -130,7 +130,8 @@ class FmuSource:
                 _remove_quietly(target)
                 violations.append(Violation(
                     f"{{subject}} cannot be extracted: {exc.strerror or exc}",
-                    Location(file=name), subject=show_name(name), rule=UNREADABLE))
+                    Location(file=name), subject=show_name(name), rule=UNREADABLE,
+                    part="path-or-system-error"))
         return violations
 
     def close(self) -> None:

@@ -56,29 +56,30 @@ def scan_zip(path: Path, limits: ArchiveLimits) -> ScanResult:
 def _inspect_zip_entry(inv: Inventory, info: zipfile.ZipInfo) -> None:
     raw = info.orig_filename
     inv.total += info.file_size
-    reason = unsafe_reason(raw)
-    if reason:
-        inv.exclude(UNSAFE_PATH, "{subject} " + reason, raw)
+    unsafe = unsafe_reason(raw)
+    if unsafe:
+        inv.exclude(UNSAFE_PATH, "{subject} " + unsafe.reason, raw, part=unsafe.part)
         return
     mode = info.external_attr >> 16
     kind = stat.S_IFMT(mode)
     if kind == stat.S_IFLNK:
         inv.exclude(UNSAFE_PATH, "{subject} is a symbolic link; FMI forbids links in the archive "
-                    "(AR-02), and it is never followed", raw, mode=oct(mode))
+                    "(AR-02), and it is never followed", raw, mode=oct(mode), part="link-entry")
         return
     if kind and kind not in (stat.S_IFREG, stat.S_IFDIR):
         inv.exclude(UNSAFE_PATH, "{subject} is a special file (device, FIFO or socket), not a "
-                    "regular file", raw, mode=oct(mode))
+                    "regular file", raw, mode=oct(mode), part="special-file")
         return
     if info.is_dir() or not normalise_name(raw):
         inv.dirs.add(normalise_name(raw))
         return
     if info.flag_bits & 0x1:
-        inv.exclude(UNREADABLE, "{subject} is encrypted; FMI forbids encryption (AR-02)", raw)
+        inv.exclude(UNREADABLE, "{subject} is encrypted; FMI forbids encryption (AR-02)", raw,
+                    part="encrypted-entry")
         return
     if info.volume:
         inv.exclude(UNREADABLE, "{subject} lies on another disk of a split archive, which FMI "
-                    "does not allow (AR-02)", raw)
+                    "does not allow (AR-02)", raw, part="split-or-spanned")
         return
     method = info.compress_type
     if method not in _ALLOWED_METHODS:
@@ -87,7 +88,7 @@ def _inspect_zip_entry(inv: Inventory, info: zipfile.ZipInfo) -> None:
                    "stored (0) and deflate (8)", raw, method=method)
         if method not in _DECODABLE_METHODS:
             inv.exclude(UNREADABLE, f"{{subject}} cannot be read: compression method {label} is "
-                        "not supported", raw, method=method)
+                        "not supported", raw, method=method, part="undecodable-method")
             return
     size, packed = info.file_size, info.compress_size
     if size > inv.limits.ratio_min_size and size > inv.limits.max_ratio * packed:
@@ -108,18 +109,19 @@ def _check_overlaps(inv: Inventory, infos: list[zipfile.ZipInfo], start_dir: int
         if after.header_offset < end:
             _drop(inv, after, TOO_LARGE, "{subject} overlaps the data of another entry "
                   f"('{show_name(info.orig_filename)}'); overlapping entries are a zip-bomb "
-                  "technique")
+                  "technique", part="overlapping-entries")
     if bounds and start_dir is not None and bounds[-1][1] > start_dir:
         _drop(inv, bounds[-1][0], UNREADABLE, "{subject} cannot be read: its data runs into the "
               "central directory (the archive is corrupt)")
 
 
-def _drop(inv: Inventory, info: zipfile.ZipInfo, rule: str, message: str) -> None:
+def _drop(inv: Inventory, info: zipfile.ZipInfo, rule: str, message: str, *,
+          part: str | None = None) -> None:
     name = normalise_name(info.orig_filename)
     member = inv.members.get(name)
     if member is not None and member.ref is info:
         del inv.members[name]
-        inv.exclude(rule, message, info.orig_filename)
+        inv.exclude(rule, message, info.orig_filename, part=part)
 
 
 def _raw_name_length(info: zipfile.ZipInfo) -> int:

@@ -23,6 +23,7 @@ error estimate (:mod:`conformance.numerics.numdiff`) plus ``rtol * S_i / nominal
 from __future__ import annotations
 
 import logging
+from dataclasses import replace
 from typing import Any, Iterator
 
 import numpy as np
@@ -52,9 +53,12 @@ def _surveys(ctx: ProbeContext, *, min_points: int = 1) -> list[Survey]:
 # ------------------------------------------------------------------------------- the probes
 
 def _against_fd(ctx: ProbeContext, s: Survey, which: str, code: str, *, rtol: float,
-                margin: float, ulps: float) -> tuple[list[Violation], dict]:
+                margin: float, ulps: float,
+                part: str | None = None) -> tuple[list[Violation], dict]:
     """The steps both derivative probes share: the FMU's refusals, the entries finite
-    differences do not confirm (recorded for the report's error plot), and their findings."""
+    differences do not confirm (recorded for the report's error plot), and their findings.
+    ``part``: the catalogue part of the unconfirmed entries (the caller's, by mode); a refusal
+    (only ever reported in DAE mode: ODE mode skips) is the part ``refused-in-dae-mode``."""
     call, fmi = _CALLS[which]
     refused = next(((point, exc) for flag, point, exc in s.failures
                     if flag == call and exc.after is None), None)
@@ -67,7 +71,7 @@ def _against_fd(ctx: ProbeContext, s: Survey, which: str, code: str, *, rtol: fl
         raise ProbeSkipped(f"{fmi} returns {exc.status} in ODE mode at point {point.label}"
                            f"{first}; a total derivative may not exist where the FMU solves its "
                            "own algebraic equations, so nothing is compared")
-    failures = list(call_failures(s, call))
+    failures = [replace(v, part="refused-in-dae-mode") for v in call_failures(s, call)]
     if not getattr(s, call) and not failures:
         raise ProbeSkipped(f"the FMU does not provide {call} derivatives")
     worst = mismatched_entries(s, which, rtol=rtol, margin=margin, ulps=ulps)
@@ -77,9 +81,9 @@ def _against_fd(ctx: ProbeContext, s: Survey, which: str, code: str, *, rtol: fl
               or closest_entries(s, which, rtol=rtol, margin=margin, ulps=ulps))
     record_errors(ctx, code, errors if s.mode == "dae" else
                   [(f"{entry} [{MODE_NAMES[s.mode]}]", err, tol) for entry, err, tol in errors])
-    found = list(entry_violations(
+    found = [replace(v, part=part) for v in entry_violations(
         s, worst, f"{fmi} gives {{subject}} that finite differences of the function do not "
-        "confirm"))
+        "confirm")]
     return failures + found, worst
 
 
@@ -121,7 +125,8 @@ def directional_derivative_mismatch(ctx: ProbeContext, *, rtol: float,
     surveys, reasons = [], []
     for s in _surveys(ctx):
         try:
-            found, _ = _against_fd(ctx, s, "dd", "DAE740", rtol=rtol, margin=margin, ulps=ulps)
+            found, _ = _against_fd(ctx, s, "dd", "DAE740", rtol=rtol, margin=margin, ulps=ulps,
+                                   part="dae-mode" if s.mode == "dae" else None)
         except ProbeSkipped as exc:
             reasons.append(str(exc))
             continue
@@ -188,19 +193,26 @@ def _undeclared(ctx: ProbeContext, s: Survey, *, rtol: float, margin: float,
                                    abs(w.items["finite_difference"]), w.items["tolerance"])
                                   for (i, j), w in worst.items()])
     for (i, j), w in sorted(worst.items()):
+        residual = s.mode == "dae" and layout.rows[i].role == "residual"
         yield Violation(
             "{subject} is clearly non-zero but the dependencies of the unknown do not list the "
             "known: an importer that colours its Jacobian from them gets it wrong",
             layout.rows[i].location, evidence(
                 entry=layout.entry(i, j), unknown=layout.rows[i].name,
                 known=layout.cols[j].name, known_value_reference=layout.cols[j].vr, **w.items,
-                point=point_evidence(layout, w.ps)), subject=layout.entry(i, j))
-    yield from _reported_dependencies(ctx, layout, s.mode)
+                point=point_evidence(layout, w.ps)), subject=layout.entry(i, j),
+            part="residual-dependencies" if residual else None)
+    if s.mode == "dae":
+        yield from _reported_dependencies(ctx, layout, s.mode,
+                                          part="reported-dependencies-dae-mode")
+    else:
+        yield from _reported_dependencies(ctx, layout, s.mode, part="reported-dependencies")
 
 
-def _reported_dependencies(ctx: ProbeContext, layout: JacobianLayout,
-                           mode: str) -> Iterator[Violation]:
-    """fmi3GetVariableDependencies against the XML of the mode, when the FMU offers it."""
+def _reported_dependencies(ctx: ProbeContext, layout: JacobianLayout, mode: str, *,
+                           part: str) -> Iterator[Violation]:
+    """fmi3GetVariableDependencies against the XML of the mode, when the FMU offers it
+    (``part``: the catalogue part, which depends on the mode)."""
     me = ctx.model.model_exchange if ctx.model is not None else None
     reader = getattr(getattr(ctx, mode), "variable_dependencies", None)
     xml = "manifest" if mode == "dae" else "modelDescription.xml"
@@ -222,7 +234,7 @@ def _reported_dependencies(ctx: ProbeContext, layout: JacobianLayout,
                 "leave it out", layout.rows[i].location,
                 evidence(entry=entry, known_value_reference=vr,
                          source="fmi3GetVariableDependencies"),
-                subject=entry)
+                subject=entry, part=part)
 
 
 def dependency_never_observed(ctx: ProbeContext, *, min_points: int) -> Iterator[Violation]:
@@ -282,7 +294,8 @@ def _never_observed(s: Survey, direct: np.ndarray | None) -> Iterator[Violation]
             "the dependencies list {subject} but the unknown did not change at all when the "
             "known was perturbed, at any sampling point", layout.rows[i].location,
             evidence(entry=layout.entry(i, j), points=len(s.points)),
-            subject=layout.entry(i, j))
+            subject=layout.entry(i, j),
+            part="time-listed" if layout.cols[j].role == "time" else None)
 
 
 def dependencies_kind_violated(ctx: ProbeContext, *, rtol: float, margin: float,

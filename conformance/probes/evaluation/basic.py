@@ -101,7 +101,8 @@ def _set_one(ctx: ProbeContext, dae: Instance, layout: Layout, start: Point, vr:
             yield Violation(
                 "the algebraic variable {subject} does not keep the value set in DAE mode: "
                 "the FMU overwrites it", where,
-                evidence(point=start.label, set=value, read_back=got, rtol=rtol), name)
+                evidence(point=start.label, set=value, read_back=got, rtol=rtol), name,
+                part="value-not-kept")
             return
         after = dae.get_float64(watch)
         tried.append(value)
@@ -116,7 +117,7 @@ def _set_one(ctx: ProbeContext, dae: Instance, layout: Layout, start: Point, vr:
             "{subject} is set: the FMU does not use the value the importer gives it", where,
             evidence(point=start.label, values_set=tried, unknowns=[layout.name(w) for w in watch],
                      relative_tolerance=react_rtol, scale="nominal or magnitude of each unknown"),
-            name)
+            name, part="no-effect")
 
 
 def _declared_anywhere(ctx: ProbeContext, vr: int) -> bool:

@@ -170,19 +170,39 @@ def _read_back(ctx: ProbeContext, layout: Layout) -> Iterator[Violation]:
                 continue
             by_subject.setdefault((fault.item.vr, fault.problem), []).append(fault)
     for (vr, problem), faults in by_subject.items():
-        first = faults[0]
-        where = [f"{f.state}, {f.mode.upper()} mode" for f in faults]
-        more = f" (and {len(where) - 1} other state(s) or mode(s))" if len(where) > 1 else ""
-        verb = _PROBLEM.get(problem, f"returns {first.status}")
-        yield Violation(
-            f"{first.call} of {{subject}} {verb} in {where[0]}{more}, where FMI 3.0 lets an "
-            f"importer read it ({_SPEC[first.state]})", var_location(ctx, vr),
-            evidence(call=first.call, status=first.status, log=list(first.log), problem=problem,
-                     state=first.state, mode=f"{first.mode.upper()} mode", where=where,
-                     value_reference=vr, type=first.item.var.type, element=first.element,
-                     causality=first.item.var.causality,
-                     variability=first.item.var.variability),
-            first.item.var.name)
+        # a refusal or an unwritten element in DAE mode's Initialization Mode, which alpha.1
+        # leaves open, is its own sub-check only when it shows nowhere else
+        judged = [f for f in faults if not (f.mode == "dae" and f.state == "Initialization Mode")]
+        if problem == "nan":
+            yield _read_back_finding(ctx, vr, problem, faults, part="nan-read-back")
+        elif not judged:
+            yield _read_back_finding(ctx, vr, problem, faults, part="dae-mode-initialization")
+        elif problem == "unwritten":
+            yield _read_back_finding(ctx, vr, problem, faults, part="unwritten")
+        elif judged[0].state == "Instantiated":
+            yield _read_back_finding(ctx, vr, problem, faults, part="refused-in-instantiated")
+        else:
+            yield _read_back_finding(ctx, vr, problem, faults,
+                                     part="refused-after-initialization")
+
+
+def _read_back_finding(ctx: ProbeContext, vr: int, problem: str, faults: list[Fault], *,
+                       part: str) -> Violation:
+    """One variable's finding: the first state and mode it shows in, the others in the
+    evidence."""
+    first = faults[0]
+    where = [f"{f.state}, {f.mode.upper()} mode" for f in faults]
+    more = f" (and {len(where) - 1} other state(s) or mode(s))" if len(where) > 1 else ""
+    verb = _PROBLEM.get(problem, f"returns {first.status}")
+    return Violation(
+        f"{first.call} of {{subject}} {verb} in {where[0]}{more}, where FMI 3.0 lets an "
+        f"importer read it ({_SPEC[first.state]})", var_location(ctx, vr),
+        evidence(call=first.call, status=first.status, log=list(first.log), problem=problem,
+                 state=first.state, mode=f"{first.mode.upper()} mode", where=where,
+                 value_reference=vr, type=first.item.var.type, element=first.element,
+                 causality=first.item.var.causality,
+                 variability=first.item.var.variability),
+        first.item.var.name, part=part)
 
 
 # ------------------------------------------------------------------------ input-not-settable

@@ -29,8 +29,10 @@ class _Steps:
 
     def __init__(self) -> None:
         self.done: list[str] = []
+        self.trying = ""     # the step in progress (the one that failed, after an FmiError)
 
     def __call__(self, label: str, fn: Any, *args: Any) -> Any:
+        self.trying = label
         result = fn(*args)
         self.done.append(label)
         return result
@@ -72,7 +74,8 @@ def _dae_handshake(ctx: ProbeContext, layout: Layout, library: Library, where: L
                 yield Violation(
                     "the enable parameter {subject} reads back false in Initialization Mode "
                     "after fmi3SetBoolean(true) in Configuration Mode", where,
-                    evidence(sequence=steps.done, expected=True, actual=False), subject)
+                    evidence(sequence=steps.done, expected=True, actual=False), subject,
+                    part="switch-read-back")
                 return
             steps("fmi3ExitInitializationMode", inst.exit_initialization_mode)
         except FmiError as exc:
@@ -86,26 +89,33 @@ def _dae_handshake(ctx: ProbeContext, layout: Layout, library: Library, where: L
         steps("fmi3GetContinuousStateDerivatives", inst.get_derivatives,
               len(layout.states))
     except FmiError as exc:
+        # the tunable switch refused in Reconfiguration Mode (entering it from Event Mode,
+        # the set, or leaving it): not the switch at instantiation
+        refused = steps.trying.startswith(RECONFIGURE)
         yield Violation(
             f"switching DAE mode on fails: {exc.call} returned {exc.status} after "
             f"{' -> '.join(steps.done) or 'nothing'}", where,
-            evidence(error_evidence(exc), sequence=steps.done, mode="dae"), subject)
+            evidence(error_evidence(exc), sequence=steps.done, mode="dae"), subject,
+            part="reconfiguration-refused" if refused else None)
     finally:
         if inst is not None:
             inst.free()
+
+
+RECONFIGURE = "fmi3EnterConfigurationMode (Reconfiguration"
 
 
 def _reconfigure(inst: Instance, vr: int, steps: _Steps, where: Location,
                  subject: str | None) -> Iterator[Violation]:
     """DAE-13: Event Mode -> Reconfiguration Mode, switch off and on again, read back."""
     for value in (False, True):
-        steps(f"fmi3EnterConfigurationMode (Reconfiguration, set {str(value).lower()})",
-              reconfigure, inst, value)
+        steps(f"{RECONFIGURE}, set {str(value).lower()})", reconfigure, inst, value)
         if steps("fmi3GetBoolean", inst.get_boolean, vr) != value:
             yield Violation(
                 "the tunable enable parameter {subject} does not read back "
                 f"{str(value).lower()} after it was set in Reconfiguration Mode", where,
-                evidence(sequence=steps.done, expected=value, actual=not value), subject)
+                evidence(sequence=steps.done, expected=value, actual=not value), subject,
+                part="switch-read-back")
 
 
 def _ode_handshake(ctx: ProbeContext, layout: Layout, library: Library, where: Location,
@@ -121,7 +131,8 @@ def _ode_handshake(ctx: ProbeContext, layout: Layout, library: Library, where: L
             yield Violation(
                 "the enable parameter {subject} reads true after instantiation: an FMU must "
                 "start in ODE mode", where, evidence(sequence=steps.done, expected=False,
-                                                     actual=True), subject)
+                                                     actual=True), subject,
+                part="switch-true-at-start")
         steps("fmi3ExitInitializationMode", inst.exit_initialization_mode)
         steps("fmi3UpdateDiscreteStates", inst.update_discrete_states)
         steps("fmi3EnterContinuousTimeMode", inst.enter_continuous_time_mode)
@@ -137,7 +148,7 @@ def _ode_handshake(ctx: ProbeContext, layout: Layout, library: Library, where: L
             f"with the enable parameter false the FMU does not run as an ordinary ODE FMU: "
             f"{exc.call} returned {exc.status}{at}", where,
             evidence(error_evidence(exc), sequence=steps.done, mode="ode",
-                     point=point.label if point else None), subject)
+                     point=point.label if point else None), subject, part="ode-run-fails")
     finally:
         if inst is not None:
             inst.free()
@@ -187,8 +198,9 @@ def reset_incomplete(ctx: ProbeContext, *, rtol: float, atol: float) -> Iterator
     instances is instances-not-independent's finding, not this one's). Where a fresh instance
     already held another value than the XML start, the reset only has to restore that value:
     start-value-not-applied reports the first cause. Every other variable a fresh instance
-    reads in Instantiated (every start value of every type, and time, MV-13) must read the
-    same after the reset (:func:`_against_fresh`)."""
+    reads in Instantiated (every start value of every type) must read the same after the reset
+    (:func:`_against_fresh`). Time is not read there: in Instantiated it has no value yet (FMI
+    3.0.2 §2.2.6: its initial value is the startTime of fmi3EnterInitializationMode)."""
     layout = layout_of(ctx)
     if ctx.dae is None:
         raise ProbeSkipped("DAE mode could not be started (see enable-handshake)")
@@ -198,7 +210,7 @@ def reset_incomplete(ctx: ProbeContext, *, rtol: float, atol: float) -> Iterator
     # reports the first cause: fmi3Reset only has to return to what instantiation left.
     snapshot = instantiated_values(ctx)
     fresh = snapshot.by_vr()
-    others = [h for h in [*snapshot.items, *snapshot.independent] if h.held is not None and
+    others = [h for h in snapshot.items if h.held is not None and
               h.var.vr not in (*vrs, layout.enable)
               and h.var.vr not in layout.flagged_start]
     again = [Held(h.var, h.start) for h in others]
@@ -230,7 +242,7 @@ def reset_incomplete(ctx: ProbeContext, *, rtol: float, atol: float) -> Iterator
             f": the FMU stays in DAE mode, and the next run starts in the wrong mode (DAE-11)",
             manifest_location(ctx, switch, ("Enable",)),
             evidence(after_reset=got_switch, start=expected_switch, point=point.label),
-            subject=layout.name(switch))
+            subject=layout.name(switch), part="switch-kept")
     yield from _against_fresh(ctx, layout, others, again, point, rtol=rtol, atol=atol)
     for vr, a, b, held in zip(vrs, got, expected, instantiated):
         if any(close(float(a), float(v), rtol=rtol, atol=atol, scale=layout.scale(vr))
@@ -246,9 +258,9 @@ def reset_incomplete(ctx: ProbeContext, *, rtol: float, atol: float) -> Iterator
 
 def _against_fresh(ctx: ProbeContext, layout: Layout, fresh: list[Held], after: list[Held],
                    point: Any, *, rtol: float, atol: float) -> Iterator[Violation]:
-    """Every other variable a fresh instance read in Instantiated (start values of every type,
-    and time) against its reading after fmi3Reset: "the same state as if fmi3Instantiate had
-    been called" (FMI 3.0.2 §2.3.1)."""
+    """Every other variable a fresh instance read in Instantiated (start values of every type)
+    against its reading after fmi3Reset: "the same state as if fmi3Instantiate had been called"
+    (FMI 3.0.2 §2.3.1)."""
     for h0, h1 in zip(fresh, after):
         if h1.held is None:
             exc = h1.error

@@ -1,12 +1,13 @@
 """Every variable an importer may read, read once in every state it may be read in, per mode.
 
 FMI 3.0 lets an importer call fmi3Get<type> in Instantiated on the variables that have a start
-value (SG-01; the independent variable too, MV-13), and on every variable in Initialization
-Mode, Event Mode and Continuous-Time Mode (SG-03, SG-04, SG-05); a clocked variable only while
-its clock ticks, so it is left out. :func:`sweep` walks one instance of a mode through those
-states (Instantiated -> Initialization -> Event -> Continuous-Time Mode) and reads, in each,
-every such variable of every type the runtime reads (``runtime.records.GETTERS``), one call per
-type. What comes back wrong is a :class:`Fault`:
+value (SG-01: "Get variable start values"; not the independent variable, which has no start and
+no value before fmi3EnterInitializationMode gives it the startTime, FMI 3.0.2 §2.2.6), and on
+every variable in Initialization Mode, Event Mode and Continuous-Time Mode (SG-03, SG-04,
+SG-05); a clocked variable only while its clock ticks, so it is left out. :func:`sweep` walks
+one instance of a mode through those states (Instantiated -> Initialization -> Event ->
+Continuous-Time Mode) and reads, in each, every such variable of every type the runtime reads
+(``runtime.records.GETTERS``), one call per type. What comes back wrong is a :class:`Fault`:
 
 * ``refused``: the call returned fmi3Error (or Discard, Fatal); the variables of a refused call
   are told apart by halving the call on fresh instances brought to the same state (a refusal
@@ -75,7 +76,7 @@ def readable(model: ModelDescription, state: str) -> list[Item]:
     for var in model.variables:
         if var.vr is None or var.type not in GETTERS or var.clocks:
             continue
-        if state == "Instantiated" and var.start is None and var.causality != "independent":
+        if state == "Instantiated" and var.start is None:
             continue
         size = element_count(model, var)
         if size and (var.type != "String" or size == 1):

@@ -14,6 +14,10 @@ point, give as many values as the XML lists, and give the same values for the sa
 The XML's list is the manifest's <EventIndicator> elements in DAE mode, falling back to
 modelDescription's when the manifest lists none (open question Q-03 of the digest), in document
 order (MS-06).
+
+fmi3GetNumberOfEventIndicators is asked where FMI 3.0.2 lists it, in Instantiated (§2.3.2; also
+Event Mode, not Continuous-Time Mode): on a fresh instance whose switch was set true in
+Configuration Mode, where an importer asks it after changing the structural parameter.
 """
 from __future__ import annotations
 
@@ -28,8 +32,9 @@ from ...runtime.layout import Layout
 from ...model.unknowns import Unknown
 from ..instruments.api import (EVENT_INDICATOR_FAULT, PLANNED, FmiError, Point, ProbeContext,
                                ProbeSkipped, noted)
-from ..instruments.common import (close, dae_of, error_evidence, layout_of, renew, root_location,
-                                  var_location)
+from ..instruments.common import (close, dae_of, error_evidence, layout_of, new_instance, renew,
+                                  root_location, var_location)
+from ...runtime.modes import configure
 
 
 def _declared(ctx: ProbeContext) -> tuple[list[Unknown], str]:
@@ -62,8 +67,31 @@ def _names(layout: Layout, listed: Sequence[Unknown], n: int) -> list[str]:
             for i in range(n)]
 
 
-def _number(dae: Instance) -> int:
-    return dae.number_of_event_indicators()
+def _instantiated(ctx: ProbeContext) -> Instance:
+    """A fresh instance in Instantiated, switched to DAE mode in Configuration Mode (an FMU
+    without an enable parameter is in DAE mode already)."""
+    inst = new_instance(ctx.facts["library"], "count-dae")  # type: ignore[arg-type]
+    try:
+        if inst.layout.enable is not None:
+            configure(inst, True)
+    except BaseException:
+        inst.free()
+        raise
+    return inst
+
+
+def _number(ctx: ProbeContext) -> int:
+    """fmi3GetNumberOfEventIndicators in DAE mode, asked in Instantiated; an FmiError of that
+    call escapes, one of reaching the state skips the probe (enable-handshake's finding)."""
+    try:
+        inst = _instantiated(ctx)
+    except FmiError as exc:
+        raise ProbeSkipped(f"no instance in Instantiated, DAE mode, to ask the number of event "
+                           f"indicators: {exc.call} returned {exc.status}") from None
+    try:
+        return inst.number_of_event_indicators()
+    finally:
+        inst.free()
 
 
 # ------------------------------------------------------------------- event-indicators-failed
@@ -78,7 +106,7 @@ def event_indicators_failed(ctx: ProbeContext) -> Iterator[Violation]:
     expected = _count(ctx, listed)
     where = _location(ctx, listed)
     try:
-        n = _number(dae)
+        n = _number(ctx)
     except FmiError as exc:
         yield Violation(
             f"fmi3GetNumberOfEventIndicators returns {exc.status} in DAE mode", where,
@@ -126,7 +154,7 @@ def event_indicators_failed(ctx: ProbeContext) -> Iterator[Violation]:
             f"the event indicator {{subject}} (element {i} of fmi3GetEventIndicators) is not "
             f"finite in DAE mode at {len(points)} sampled point(s), first at {points[0]}",
             var_location(ctx, vr) if vr is not None else where,
-            evidence(points=points, index=i), names[i])
+            evidence(points=points, index=i), names[i], part="not-finite")
 
 
 # ------------------------------------------------------------- event-indicators-inconsistent
@@ -141,7 +169,7 @@ def event_indicators_inconsistent(ctx: ProbeContext, *, rtol: float, atol: float
     layout = layout_of(ctx)
     listed, _ = _declared(ctx)
     expected = _count(ctx, listed)
-    n = _number(dae)  # an FmiError skips the probe: event-indicators-failed reports it
+    n = _number(ctx)  # an FmiError skips the probe: event-indicators-failed reports it
     if expected is None:
         raise ProbeSkipped("an <EventIndicator> names an array variable: the probe compares "
                            "scalar indicators only")
@@ -173,7 +201,7 @@ def event_indicators_inconsistent(ctx: ProbeContext, *, rtol: float, atol: float
                         f"fmi3GetFloat64 of the indicator variables returns {exc.status}: the "
                         "vector and the variables disagree", _location(ctx, listed),
                         evidence(error_evidence(exc), point=point.label, t=point.t),
-                        subject="fmi3GetFloat64")
+                        subject="fmi3GetFloat64", part="variables-refused")
                 dae = renew(ctx, "dae")
                 if dae is None:
                     return
@@ -219,7 +247,7 @@ def _against_variables(ctx: ProbeContext, layout: Layout, names: list[str],
             "vector and the variable disagree", _where(ctx, vrs[i]),
             evidence(point=point.label, t=point.t, index=i, event_indicators=float(x),
                      get_float64=float(y), **_tolerance(layout, vrs[i], x, y, rtol, atol)),
-            names[i])
+            names[i], part="vector-vs-variables")
 
 
 def _against_first(ctx: ProbeContext, layout: Layout, names: list[str],

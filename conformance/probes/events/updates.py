@@ -64,7 +64,7 @@ def event_update_invalid(ctx: ProbeContext) -> Iterator[Violation]:
                     f"fmi3UpdateDiscreteStates still says discreteStatesNeedUpdate after "
                     f"{MAX_UPDATES} calls", _where(ctx),
                     evidence(mode=w.mode, t=i.t, calls=MAX_UPDATES),
-                    subject="discreteStatesNeedUpdate")
+                    subject="discreteStatesNeedUpdate", part="iteration-not-settled")
                 break
             if i.error is not None:
                 yield Violation(
@@ -72,7 +72,7 @@ def event_update_invalid(ctx: ProbeContext) -> Iterator[Violation]:
                     f"({mode}), in Event Mode entered from Continuous-Time Mode at the FMU's own "
                     "states: a legal call", _where(ctx),
                     evidence(error_evidence(i.error), mode=w.mode, t=i.t),
-                    subject="fmi3UpdateDiscreteStates")
+                    subject="fmi3UpdateDiscreteStates", part="update-refused")
                 break
 
 
@@ -124,7 +124,7 @@ def values_stale_after_event(ctx: ProbeContext, *, rtol: float, atol: float
                     evidence(mode=w.mode, t=i.t, at_event=float(a), fresh=float(b),
                              tolerance=atol + rtol * max(layout.scale(vr), abs(a), abs(b)),
                              rtol=rtol, atol=atol, scale="nominal or magnitude"),
-                    subject=layout.name(vr))
+                    subject=layout.name(vr), part="dae-mode" if w.mode == "dae" else None)
                 found = True
                 break
             if found:

@@ -104,7 +104,7 @@ def _undeclared(s: InitialSurvey, *, rtol: float, margin: float, ulps: float,
             evidence(_where(s), entry=layout.entry(i, j), unknown=row.name, known=col.name,
                      known_value_reference=col.vr, known_role=col.role, **w.items,
                      point=point_evidence(layout, w.ps)),
-            subject=layout.entry(i, j)))
+            subject=layout.entry(i, j), part="dae-mode" if s.mode == "dae" else None))
     yield from found
 
 

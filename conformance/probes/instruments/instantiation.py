@@ -44,12 +44,12 @@ class Held:
 
 @dataclass
 class Instantiated:
-    """The snapshot: every variable read, or why none could be (``reason``); ``independent``:
-    the independent variable, which has no start but may be read (MV-13), as time reads there."""
+    """The snapshot: every variable read, or why none could be (``reason``). The independent
+    variable is not read: it has no start, and no value before fmi3EnterInitializationMode
+    gives it the startTime (FMI 3.0.2 §2.2.6), so an importer does not read it in Instantiated."""
 
     items: list[Held] = field(default_factory=list)
     reason: str = ""
-    independent: list[Held] = field(default_factory=list)
 
     def by_vr(self) -> dict[int, Held]:
         return {h.var.vr: h for h in self.items if h.var.vr is not None}
@@ -137,15 +137,11 @@ def _take(ctx: ProbeContext) -> Instantiated:
         inst = new_instance(library, "instantiated")
     except FmiError as exc:
         return Instantiated(reason=f"{exc.call} returned {exc.status}: nothing to read")
-    independent = [Held(v, [math.nan]) for v in model.variables if v.vr is not None and
-                   v.causality == "independent" and v.type in ("Float32", "Float64") and
-                   not v.dimensions]
     try:
         read_held(inst, items)
-        read_held(inst, independent)
     finally:
         inst.free()
-    return Instantiated(items, independent=independent)
+    return Instantiated(items)
 
 
 def read_held(inst: Any, items: list[Held]) -> None:

@@ -264,7 +264,7 @@ def in_mode(violations: Iterable[Violation], s: Survey) -> Iterator[Violation]:
     for v in violations:
         yield Violation(f"{v.message} ({MODE_NAMES[s.mode]})", v.location,
                         evidence(mode_evidence(s), **dict(v.evidence)), subject=v.subject,
-                        rule=v.rule)
+                        rule=v.rule, part=v.part)
 
 
 def record_errors(ctx: ProbeContext, code: str, items: list[tuple[str, float, float]]) -> None:

@@ -38,6 +38,16 @@ MEMORY_FRACTION = 0.8        # a death at this share of the address-space limit 
 HANG_SHARE = 0.5             # a call running this share of its probe's time is a hang
 FMU_SHARE = 0.5              # FMI calls that grew the address space by this share: the FMU's
 STDERR_TAIL = 1500
+#: The probe that makes calls the importer must not make (it tests robustness), and those calls:
+#: a crash during one of them is no verdict of the text (FMI requires no detection of an
+#: illegal call). illegal-call-accepted (DAE739, readback/rare_calls.py) makes them as
+#: fmi3SetBoolean on a Float64 variable in Configuration Mode and the partial-derivative calls
+#: with wrong arguments. The record names the function only: the legal fmi3SetBoolean on the
+#: switch that starts a DAE-mode instance in that probe (one every earlier probe made alike) is
+#: counted with them.
+ILLEGAL_CALLS: dict[str, frozenset[str]] = {
+    "DAE739": frozenset({"fmi3SetBoolean", "fmi3GetDirectionalDerivative",
+                         "fmi3GetAdjointDerivative"})}
 
 log = logging.getLogger(__name__)
 
@@ -48,6 +58,17 @@ def read_counts(call_file: str) -> CallCounts:
             return CallRecord.counts(fh.read(CallRecord.SIZE))
     except OSError:
         return CallCounts(0, 0)
+
+
+def not_loadable(exc: Exception, directory: str) -> Violation:
+    """``binary-not-loadable`` for the library the worker could not load from the FMU unpacked
+    at ``directory`` (:mod:`.stage` sends it). fmpy loads the library, then resolves every fmi3*
+    function of fmi3Functions.h in it: a missing one raises AttributeError (ctypes: "undefined
+    symbol", "function ... not found"), a library that does not load at all another exception."""
+    error = str(exc).replace(directory + os.sep, "")  # the path in the FMU
+    return Violation(f"the binary cannot be loaded: {error}", Location(),
+                     evidence(error=error, exception=type(exc).__name__),
+                     part="missing-function" if isinstance(exc, AttributeError) else None)
 
 
 class CallClock:
@@ -188,7 +209,7 @@ class Diagnosis:
                 f"{self.run.names(probe)} ({how})", Location(file=self.run.binary),
                 evidence(facts, exit=how, grown_in_fmi_calls_mib=round(grown / (1 << 20)),
                          last_growing_call=grew, limit_mib=limit_mib,
-                         **self._stderr_evidence()), subject=grew))
+                         **self._stderr_evidence()), subject=grew, part="grown-across-calls"))
             return probe, ""
         if memory and not (call and facts["call_in_progress"]):  # ours: the binary was idle
             return probe, self._own(
@@ -211,7 +232,9 @@ class Diagnosis:
                 f"{self.run.names(probe)} ({how})", Location(file=self.run.binary),
                 ev + evidence(limit_mib=limit_mib), subject=call or probe))
         else:
+            illegal = facts["call_in_progress"] and call in ILLEGAL_CALLS.get(probe, ())
             self.run.emit(CRASHED, Violation(
                 f"the binary crashed ({how}) {where}, in {self.run.names(probe)}",
-                Location(file=self.run.binary), ev, subject=call or probe))
+                Location(file=self.run.binary), ev, subject=call or probe,
+                part="crash-on-illegal-call" if illegal else None))
         return probe, ""

@@ -44,7 +44,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from ...report.findings import Location, Violation, evidence
+from ...report.findings import Violation, evidence
 from ...runtime.callrecord import CallRecord
 from ...runtime.child import memory_info, near_limit, reset_peak_memory
 from ...runtime.layout import Layout
@@ -55,6 +55,7 @@ from ..instruments.api import PLANNED, PLANNED_OPTIONS, FmiError, ProbeContext, 
 from ..instruments.common import renew_failed
 from ..instruments.independence import FIRST, survey
 from ..instruments.jacobian_layout import MODE_NAMES
+from .deaths import not_loadable
 from .job import ProbeJob
 from .registry import FIRST_CAUSE, PROBES
 from ..instruments.sampling import near_points, points_info, start_point
@@ -86,10 +87,8 @@ class _Stage:
         try:
             library = Library(self.job.directory, layout, record, blocked=self.job.blocked)
         except Exception as exc:  # fmpy raises plain Exception or AttributeError here
-            error = str(exc).replace(self.job.directory + os.sep, "")  # the path in the FMU
-            self.send({"event": "load-failed", "violation": violation_json(Violation(
-                f"the binary cannot be loaded: {error}", Location(),
-                evidence(error=error, exception=type(exc).__name__)))})
+            self.send({"event": "load-failed",
+                       "violation": violation_json(not_loadable(exc, self.job.directory))})
             return 0
         ctx = self._context(library, layout)
         self.send({"event": "ready", "info": self._info(ctx.facts["info"]),

@@ -59,8 +59,12 @@ def state_vectors_inconsistent(ctx: ProbeContext, *, rtol: float, atol: float
     state it names. One finding per variable and getter (the first point and mode)."""
     layout = layout_of(ctx)
     reported: set[tuple[str, int]] = set()
+    # in DAE mode the manifest's <ContinuousStateDerivative> list, when it has one, orders
+    # the vectors (alpha.1 re-defines the ModelStructure), else the modelDescription's
+    manifest_order = bool(ctx.manifest and any(ctx.manifest.unknowns("ContinuousStateDerivative")))
     for mode, inst in _instances(ctx):
         states, ders = layout.states_for(mode), layout.derivatives_for(mode)
+        by_manifest = mode == "dae" and manifest_order
         if not states:
             continue
         for point in ctx.points:
@@ -76,14 +80,15 @@ def state_vectors_inconsistent(ctx: ProbeContext, *, rtol: float, atol: float
                     break
                 continue
             for fname, vrs, vector, scalars in read:
-                yield from _vector_against(ctx, layout, mode, point, fname, vrs, vector,
-                                           scalars, reported, rtol=rtol, atol=atol)
+                yield from _vector_against(
+                    ctx, layout, mode, point, fname, vrs, vector, scalars, reported, rtol=rtol,
+                    atol=atol, part="dae-mode-order" if by_manifest else None)
 
 
 def _vector_against(ctx: ProbeContext, layout: Layout, mode: str, point: Point, fname: str,
                     vrs: Sequence[int], vector: np.ndarray, scalars: np.ndarray,
-                    reported: set[tuple[str, int]], *, rtol: float, atol: float
-                    ) -> Iterator[Violation]:
+                    reported: set[tuple[str, int]], *, rtol: float, atol: float,
+                    part: str | None = None) -> Iterator[Violation]:
     for i, (vr, x, y) in enumerate(zip(vrs, vector, scalars)):
         x, y = float(x), float(y)
         if (fname, vr) in reported or not (math.isfinite(x) and math.isfinite(y)):
@@ -99,7 +104,7 @@ def _vector_against(ctx: ProbeContext, layout: Layout, mode: str, point: Point, 
                      t=point.t, mode=_mode(mode), rtol=rtol, atol=atol,
                      tolerance=atol + rtol * max(layout.scale(vr), abs(x), abs(y)),
                      scale="nominal or magnitude of the variable"),
-            layout.name(vr))
+            layout.name(vr), part=part)
 
 
 # ------------------------------------------------------------------- state-nominals-invalid
@@ -135,23 +140,33 @@ def state_nominals_invalid(ctx: ProbeContext) -> Iterator[Violation]:
                 f"Mode ({_mode(mode)}), where FMI 3.0 allows it", root_location(ctx),
                 evidence(call=got.call, status=got.status, log=list(got.log[:10]),
                          mode=_mode(mode), state="Continuous-Time Mode"),
-                subject="fmi3GetNominalsOfContinuousStates")
+                subject="fmi3GetNominalsOfContinuousStates", part="refused")
             continue
         first, second = got
         for i, vr in enumerate(states):
             a, b = float(first[i]), float(second[i])
             if a == b and math.isfinite(a) and a > 0:
                 continue
+            unwritten = a != b and not (math.isnan(a) and math.isnan(b))
             why = ("depends on what the caller's buffer held (the FMU does not write it)"
-                   if a != b and not (math.isnan(a) and math.isnan(b)) else
-                   "is not finite" if not math.isfinite(a) else "is not > 0")
-            yield Violation(
-                f"fmi3GetNominalsOfContinuousStates gives {a!r} for {{subject}} (element {i}) "
-                f"in {_mode(mode)}: the nominal {why}; FMI 3.0 requires nominals[i] > 0.0",
-                var_location(ctx, vr),
-                evidence(index=i, into_nan=a, into_1e300=b, fills=["nan", 1e300],
-                         mode=_mode(mode), state="Continuous-Time Mode"),
-                layout.name(vr))
+                   if unwritten else "is not finite" if not math.isfinite(a) else "is not > 0")
+            if unwritten:
+                yield _nominal_invalid(ctx, layout, mode, i, vr, a, b, why, part="unwritten")
+            elif a == math.inf:  # > 0.0, all FMI requires (NaN and -Inf are not)
+                yield _nominal_invalid(ctx, layout, mode, i, vr, a, b, why, part="infinite")
+            else:
+                yield _nominal_invalid(ctx, layout, mode, i, vr, a, b, why, part=None)
+
+
+def _nominal_invalid(ctx: ProbeContext, layout: Layout, mode: str, i: int, vr: int, a: float,
+                     b: float, why: str, *, part: str | None) -> Violation:
+    return Violation(
+        f"fmi3GetNominalsOfContinuousStates gives {a!r} for {{subject}} (element {i}) "
+        f"in {_mode(mode)}: the nominal {why}; FMI 3.0 requires nominals[i] > 0.0",
+        var_location(ctx, vr),
+        evidence(index=i, into_nan=a, into_1e300=b, fills=["nan", 1e300],
+                 mode=_mode(mode), state="Continuous-Time Mode"),
+        layout.name(vr), part=part)
 
 
 def state_nominal_not_xml(ctx: ProbeContext, *, rtol: float) -> Iterator[Violation]:

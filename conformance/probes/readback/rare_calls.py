@@ -45,6 +45,8 @@ def stop_time_refused(ctx: ProbeContext) -> Iterator[Violation]:
     library = ctx.facts["library"]
     t0 = layout.start_time
     stop = _own_stop_time(ctx, t0)
+    # lsdae's own window, not a stop time of the FMU's experiment
+    own = stop != getattr(getattr(ctx.model, "default_experiment", None), "stop_time", None)
     tried = 0
     for mode in layout.modes:
         held = getattr(ctx, mode)
@@ -66,7 +68,8 @@ def stop_time_refused(ctx: ProbeContext) -> Iterator[Violation]:
                     "the FMU", _where(ctx),
                     evidence(error_evidence(exc), mode=mode, start_time=t0, stop_time=stop,
                              tolerance_defined=True, tolerance=1e-6),
-                    subject="fmi3EnterInitializationMode")
+                    subject="fmi3EnterInitializationMode",
+                    part="no-default-stop-time" if own else None)
                 continue
             inst.initialised = inst.initializing = True
         finally:

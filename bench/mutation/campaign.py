@@ -28,7 +28,8 @@ from typing import Any, Callable, Iterable
 from scenes.build import SCENES_DIR, SceneBuildError, build_scene
 
 from . import oracle, promises
-from .checking import MAIN, SETTINGS, CheckResult, Setting, new_findings, outcome, run_check
+from .checking import (MAIN, SETTINGS, CheckResult, Setting, new_findings, new_information,
+                       outcome, run_check)
 from .generate import Mutant
 from .targets import _CACHE, IMPLICIT, IMPLICIT_REASON, Target, syntax_errors
 
@@ -151,6 +152,9 @@ def run_mutant(runner: Runner, m: Mutant) -> dict[str, Any]:
         rec["equivalent_but_reported"] = verdict == "killed"
         return rec
     rec["outcome"] = verdict
+    if verdict == "informed":
+        rec["informed_by"] = sorted([c, s, n] for (c, s), n in
+                                    new_information(orig["checks"][MAIN], result).items())
     if verdict == "survived":
         mine, theirs = runner.promises(fmu), orig["promises"]
         rec["promises"] = {k: v for k, v in mine.items() if k not in theirs}

@@ -27,6 +27,7 @@ from typing import Any
 
 REPO_ROOT = Path(__file__).resolve().parents[2]
 KILLING = ("error", "warning")
+INFORMING = ("info",)    # said, at the weight its text gives: no verdict of non-conformance
 INTERNAL = "DAE099"
 Key = tuple[str, str]   # (rule code, subject)
 
@@ -69,18 +70,22 @@ class CheckResult:
     seconds: float
     findings: dict[Key, str] = field(default_factory=dict)   # killing-level key -> rule name
     internal: list[str] = field(default_factory=list)        # DAE099 messages
+    informed: dict[Key, str] = field(default_factory=dict)   # information-level key -> name
     detail: str = ""
 
     def to_json(self) -> dict[str, Any]:
         return {"status": self.status, "seconds": round(self.seconds, 3),
                 "findings": sorted([code, subject, name]
                                    for (code, subject), name in self.findings.items()),
-                "internal": self.internal, "detail": self.detail}
+                "internal": self.internal, "detail": self.detail,
+                "informed": sorted([code, subject, name]
+                                   for (code, subject), name in self.informed.items())}
 
     @classmethod
     def from_json(cls, data: dict[str, Any]) -> CheckResult:
         return cls(data["status"], data["seconds"],
                    {(c, s): n for c, s, n in data["findings"]}, data["internal"],
+                   {(c, s): n for c, s, n in data.get("informed", [])},
                    data.get("detail", ""))
 
 
@@ -88,17 +93,22 @@ def subject_of(finding: dict[str, Any]) -> str:
     return finding.get("subject") or finding.get("path") or ""
 
 
-def read_findings(report: dict[str, Any]) -> tuple[dict[Key, str], list[str]]:
-    """The killing-level (code, subject) keys of a JSON report, and its internal errors."""
+def read_findings(report: dict[str, Any]
+                  ) -> tuple[dict[Key, str], list[str], dict[Key, str]]:
+    """The killing-level (code, subject) keys of a JSON report, its internal errors, and its
+    information-level keys."""
     keys: dict[Key, str] = {}
     internal: list[str] = []
+    informed: dict[Key, str] = {}
     for fmu in report.get("fmus", []):
         for f in fmu.get("findings", []):
             if f["code"] == INTERNAL:
                 internal.append(f.get("message", "")[:300])
             elif f["severity"] in KILLING:
                 keys[(f["code"], subject_of(f))] = f["name"]
-    return keys, internal
+            elif f["severity"] in INFORMING:
+                informed[(f["code"], subject_of(f))] = f["name"]
+    return keys, internal, informed
 
 
 def run_check(fmu: Path, setting: Setting, *, timeout: float = 300.0) -> CheckResult:
@@ -123,9 +133,10 @@ def run_check(fmu: Path, setting: Setting, *, timeout: float = 300.0) -> CheckRe
             if not out.is_file():
                 return CheckResult("failed", result.seconds, detail=f"exit {proc.returncode}: "
                                    f"{proc.stderr.strip()[-300:]}")
-            keys, internal = read_findings(json.loads(out.read_text()))
+            keys, internal, informed = read_findings(json.loads(out.read_text()))
             result.findings.update(keys)
             result.internal += internal
+            result.informed.update(informed)
     return result
 
 
@@ -134,15 +145,23 @@ def new_findings(original: CheckResult, mutant: CheckResult) -> dict[Key, str]:
     return {k: v for k, v in mutant.findings.items() if k not in original.findings}
 
 
+def new_information(original: CheckResult, mutant: CheckResult) -> dict[Key, str]:
+    """The mutant's information-level keys the original has not."""
+    return {k: v for k, v in mutant.informed.items() if k not in original.informed}
+
+
 def outcome(original: CheckResult, mutant: CheckResult) -> str:
-    """killed, survived, check-timeout, check-failed, or internal-error (lsdae failed and
-    nothing else is new)."""
+    """killed, informed (no new error or warning, but a new finding of information: lsdae says
+    it at the weight its text gives, which calls nothing non-conformant), survived,
+    check-timeout, check-failed, or internal-error (lsdae failed and nothing else is new)."""
     if mutant.status == "timeout":
         return "check-timeout"
     if mutant.status != "ok":
         return "check-failed"
     if new_findings(original, mutant):
         return "killed"
+    if new_information(original, mutant):
+        return "informed"
     if mutant.internal and not original.internal:
         return "internal-error"
     return "survived"

@@ -15,8 +15,8 @@ from .sweep import plot
 from .verdicts import CLASSES, Verdict, explain
 
 TIMING_RULES = {"DAE702", "DAE804"}   # verdicts that depend on the machine's speed
-OUTCOMES = ("stillborn", "equivalent", "killed", "survived", "check-timeout", "check-failed",
-            "internal-error")
+OUTCOMES = ("stillborn", "equivalent", "killed", "informed", "survived", "check-timeout",
+            "check-failed", "internal-error")
 
 
 def classify(records: list[dict[str, Any]], verdicts: dict[str, Verdict]) -> None:
@@ -98,16 +98,25 @@ def markdown(data: dict[str, Any]) -> str:
                 + (", ".join(f"`{f}` {a}-{b}" for f, a, b in c["functions"]) or "the whole file")
                 + " |" for c in data["covered"]]
     out += ["", "## Per target", "",
-            "| target | host | generated | sampled | stillborn | equivalent | killed | survived "
-            "(consistent / missed / undetectable / unexplained) | timeout / failed / internal "
-            "| score |", "|---|---|---:|---:|---:|---:|---:|---|---|---:|"]
+            "| target | host | generated | sampled | stillborn | equivalent | killed | informed "
+            "| survived (consistent / missed / undetectable / unexplained) | timeout / failed / "
+            "internal | score |", "|---|---|---:|---:|---:|---:|---:|---:|---|---|---:|"]
     for r in rows:
         name = f"**{r['target']}**" if r["target"] == "total" else f"`{r['target']}`"
         out.append(f"| {name} | {r['host']} | {r['generated']} | {r['sampled']} | "
-                   f"{r['stillborn']} | {r['equivalent']} | {r['killed']} | {r['survived']} "
+                   f"{r['stillborn']} | {r['equivalent']} | {r['killed']} | {r['informed']} | "
+                   f"{r['survived']} "
                    f"({r['consistent-model-change']} / {r['missed-defect']} / "
                    f"{r['undetectable']} / {r['UNEXPLAINED']}) | {r['check-timeout']} / "
                    f"{r['check-failed']} / {r['internal-error']} | {_pct(r['score'])} |")
+    told = [r for r in data["mutants"] if r["outcome"] == "informed"]
+    if told:
+        out += ["", f"## Told at information ({len(told)})", "",
+                "No new error or warning, but a new finding of information: lsdae says it at "
+                "the weight its text gives (docs/verdicts.md), which calls nothing "
+                "non-conformant. Neither killed nor missed: outside the score.", ""]
+        out += [f"- `{r['id']}`: " + "; ".join(f"{c} {n} ({s})" for c, s, n in
+                                                r.get("informed_by", [])) for r in told]
     survivors = [r for r in data["mutants"] if r["outcome"] == "survived"]
     out += ["", f"## Survivors ({len(survivors)})", "",
             "Grouped by verdict; the promise a missed defect breaks, and the evidence.", ""]

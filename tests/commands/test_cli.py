@@ -139,14 +139,19 @@ def _codes(out_file) -> set[str]:
 
 def test_rule_options_from_the_command_line_and_pyproject(scene, tmp_path, monkeypatch, capsys):
     """A rule's option, set on the command line or in [tool.lsdae.rule-options], changes the
-    verdict: modelDescription.xml (about 1.9 kB) is too large for a 1000-byte member limit."""
+    verdict: modelDescription.xml (about 1.9 kB) is too large for a 1000-byte member limit.
+    The limit is lsdae's own: a warning (issue 29), so --fail-on warning makes it fail."""
     path = scene()
     out = tmp_path / "r.json"
-    base = ["check", path, "--no-probes", "--format", "json", "-o", str(out)]
+    base = ["check", path, "--no-probes", "--fail-on", "warning", "--format", "json",
+            "-o", str(out)]
     monkeypatch.chdir(tmp_path)
     assert main(base) == 0 and "DAE004" not in _codes(out)
     assert main([*base, "--rule-option", "DAE004.max_member=1000"]) == 1
     assert "DAE004" in _codes(out)
+    (limit,) = [f for f in json.loads(out.read_text())["fmus"][0]["findings"]
+                if f["code"] == "DAE004"]
+    assert limit["severity"] == "warning"
     (tmp_path / "pyproject.toml").write_text(
         "[tool.lsdae.rule-options.archive-too-large]\nmax_member = 1000\n")
     assert main(base) == 1 and "DAE004" in _codes(out)

@@ -65,8 +65,20 @@ def _mismatch(dae: Trajectory, ode: Trajectory):
 
 
 def test_a_gap_at_the_initial_point_is_its_part():
+    """Other states at the start: the initialisations differ (alpha.1 leaves DAE mode's open)."""
     (v,) = _mismatch(_traj("dae", [1.0, 1.0, 1.0]), _traj("ode", [1.1, 1.1, 1.1]))
     assert v.part == "initial-gap"
+
+
+def test_the_same_states_and_other_algebraic_values_at_the_start_are_the_rules_own_case():
+    """The modes contradict each other at one point: the rule's own verdict (an error)."""
+    def both(mode: str, w: float) -> Trajectory:
+        values = np.array([[1.0, w], [1.0, w], [1.0, w]])
+        return Trajectory(mode=mode, names=["x", "w"], kinds=["state", "algebraic"],
+                          times=[0.0, 0.5, 1.0], values=values, t_end=1.0, stop_time=1.0,
+                          rtol=1e-6, atol=[1e-8, 1e-8], steps=10)
+    (v,) = _mismatch(both("dae", 2.0), both("ode", 2.5))
+    assert v.part is None
 
 
 def test_a_gap_born_after_an_event_is_its_part_and_one_before_is_not():

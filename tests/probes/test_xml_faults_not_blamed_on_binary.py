@@ -35,7 +35,10 @@ def test_faulty_attribute_is_only_a_static_finding(case):
     edits, expected = CASES[case]
     fmu = variant("SimpleDAE", md_edits=edits)
     report = check_fmu(fmu, options=EngineOptions(probes=True))
-    found = {f.code for f in report.findings if f.severity >= Severity.WARNING}
+    # the attribute's own rule at any weight (a non-finite start or nominal is information
+    # since issue 29: no text forbids it), every other finding from a warning up
+    found = {f.code for f in report.findings
+             if f.severity >= Severity.WARNING or f.code in expected}
     detail = "\n".join(f"  {f.severity} {f.code} {f.name}: {f.message}" for f in report.findings)
     assert found == expected, f"{case}: {sorted(found)} instead of {sorted(expected)}\n{detail}"
     assert any(c.startswith("DAE7") for c in report.rules_run), "the probes did not run"

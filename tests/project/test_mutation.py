@@ -80,12 +80,13 @@ def test_a_mutant_that_does_not_compile_is_stillborn(runner, old, new):
     assert rec["outcome"] == "stillborn" and rec["build_detail"]
 
 
-def test_the_nominal_mutant_is_killed_by_state_nominal_not_xml(runner):
+def test_the_nominal_mutant_is_said_by_state_nominal_not_xml_as_information(runner):
     # The binary's nominal of x differs from the XML's (1): a survivor of the first campaign,
-    # closed by state-nominal-not-xml (DAE716).
+    # closed by state-nominal-not-xml (DAE716), which no text backs (issue 29: advice): the
+    # mutant is told, at information, and is no kill.
     rec = run_mutant(runner, mutant(".x_nominal = {1.0}", ".x_nominal = {2.0}"))
-    assert rec["outcome"] == "killed"
-    assert [code for code, _, _ in rec["killed_by"]] == ["DAE716"]
+    assert rec["outcome"] == "informed" and rec["killed_by"] == []
+    assert [code for code, _, _ in rec["informed_by"]] == ["DAE716"]
 
 
 def test_a_survivor_needs_a_verdict_that_the_evidence_does_not_contradict(runner, monkeypatch):
@@ -161,7 +162,10 @@ def test_the_kill_criterion_is_a_new_error_or_warning_by_rule_and_subject():
                             ("DAE740", "error", "d(x)/d(b)", "/p"))
     assert outcome(original, CheckResult("ok", 1, *read_findings(other_subject))) == "killed"
     info_only = _report(("DAE743", "info", "d(x)/d(y)", "/q"))
-    assert outcome(original, CheckResult("ok", 1, *read_findings(info_only))) == "survived"
+    # a new finding of information: said at the weight its text gives, no verdict (issue 29)
+    assert outcome(original, CheckResult("ok", 1, *read_findings(info_only))) == "informed"
+    known_info = _report(("DAE743", "info", "d(c)/d(d)", "/q"))
+    assert outcome(original, CheckResult("ok", 1, *read_findings(known_info))) == "survived"
     by_path = _report(("DAE747", "warning", None, "/r"))
     assert outcome(original, CheckResult("ok", 1, *read_findings(by_path))) == "killed"
     internal = _report(("DAE099", "error", None, "/"))

@@ -51,8 +51,25 @@ def tally(records: list[dict[str, Any]], generated: dict[str, int]) -> list[dict
                      else generated[target],
                      "sampled": len(recs), **{o: counts[o] for o in OUTCOMES},
                      **{c: classes[c] for c in (*CLASSES, "UNEXPLAINED")},
-                     "score": killed / (killed + missed) if killed + missed else None})
+                     "score": killed / (killed + missed) if killed + missed else None,
+                     "per_kill": findings_per_kill(recs)})
     return rows
+
+
+def findings_per_kill(records: list[dict[str, Any]]) -> dict[str, float] | None:
+    """The new error and warning findings of each killed mutant (its ``killed_by``): mean,
+    median and max; one defect should be one finding (issue 29: mean <= 1.3, max <= 3)."""
+    counts = sorted(len(r.get("killed_by", [])) for r in records if r["outcome"] == "killed")
+    if not counts:
+        return None
+    mid = len(counts) // 2
+    median = counts[mid] if len(counts) % 2 else (counts[mid - 1] + counts[mid]) / 2
+    return {"mean": sum(counts) / len(counts), "median": median, "max": counts[-1]}
+
+
+def _per_kill(value: dict[str, float] | None) -> str:
+    return "-" if value is None else \
+        f"{value['mean']:.2f} / {value['median']:g} / {value['max']:g}"
 
 
 def rule_kills(records: list[dict[str, Any]]) -> list[dict[str, Any]]:
@@ -100,7 +117,8 @@ def markdown(data: dict[str, Any]) -> str:
     out += ["", "## Per target", "",
             "| target | host | generated | sampled | stillborn | equivalent | killed | informed "
             "| survived (consistent / missed / undetectable / unexplained) | timeout / failed / "
-            "internal | score |", "|---|---|---:|---:|---:|---:|---:|---:|---|---|---:|"]
+            "internal | score | findings per kill (mean / median / max) |",
+            "|---|---|---:|---:|---:|---:|---:|---:|---|---|---:|---:|"]
     for r in rows:
         name = f"**{r['target']}**" if r["target"] == "total" else f"`{r['target']}`"
         out.append(f"| {name} | {r['host']} | {r['generated']} | {r['sampled']} | "
@@ -108,7 +126,8 @@ def markdown(data: dict[str, Any]) -> str:
                    f"{r['survived']} "
                    f"({r['consistent-model-change']} / {r['missed-defect']} / "
                    f"{r['undetectable']} / {r['UNEXPLAINED']}) | {r['check-timeout']} / "
-                   f"{r['check-failed']} / {r['internal-error']} | {_pct(r['score'])} |")
+                   f"{r['check-failed']} / {r['internal-error']} | {_pct(r['score'])} | "
+                   f"{_per_kill(r['per_kill'])} |")
     told = [r for r in data["mutants"] if r["outcome"] == "informed"]
     if told:
         out += ["", f"## Told at information ({len(told)})", "",

@@ -82,7 +82,10 @@ class Violation:
     ``rule`` is set only by loaders and stages that emit several pseudo-rules (archive, XML,
     schema); ordinary checks leave it empty and the engine knows which rule it ran. ``part``
     names the sub-check of the rule whose basis (and so severity) differs from the rule's own
-    (``[[rule.parts]]`` in the catalogue); None is the rule's own verdict.
+    (``[[rule.parts]]`` in the catalogue); None is the rule's own verdict. ``cause`` names the
+    defect itself, where several probes can see one defect (the same derivative entry and
+    deviation in several functions, modes or states): violations with the same cause are one
+    finding, the others listed in its evidence (``conformance.probes.machinery.runner``).
     """
 
     message: str
@@ -91,6 +94,7 @@ class Violation:
     subject: str | None = None
     rule: str | None = None
     part: str | None = None
+    cause: str | None = None
 
     @property
     def text(self) -> str:

@@ -47,7 +47,7 @@ def violation_json(v: Any) -> dict[str, Any]:
     loc = v.location
     return {"message": v.message, "location": [loc.file, loc.line, loc.column, loc.path],
             "evidence": [[k, val] for k, val in v.evidence], "subject": v.subject,
-            "rule": v.rule, "part": v.part}
+            "rule": v.rule, "part": v.part, "cause": v.cause}
 
 
 def _tuples(value: Any) -> Any:
@@ -61,4 +61,4 @@ def violation_from_json(data: dict[str, Any]) -> Any:
     file, line, column, path = (list(data.get("location") or []) + [None] * 4)[:4]
     return Violation(str(data.get("message", "")), Location(file, line, column, path),
                      _tuples(data.get("evidence") or []), data.get("subject"), data.get("rule"),
-                     data.get("part"))
+                     data.get("part"), data.get("cause"))

@@ -23,7 +23,7 @@ from conformance.numerics import colouring as col
 from conformance.numerics import measure, numdiff
 from conformance.probes.instruments.api import ProbeContext
 from conformance.probes.instruments.jacobian_layout import build_layout
-from conformance.report.findings import Severity
+from conformance.report.findings import Severity, thaw
 from conformance.run.engine import EngineOptions
 from tests.checkkit import checked
 from tests.fixtures import build_scene, chain, variant
@@ -167,12 +167,23 @@ def test_an_initial_unknown_of_modeldescription_is_verified_beside_the_manifests
 
 # ------------------------------------------------------------------------------- both modes
 
-def test_a_wrong_partial_derivative_behind_both_modes_is_reported_in_each():
+def test_a_wrong_partial_derivative_behind_both_modes_is_one_finding_that_names_each():
+    """One defect, one finding (issue 29): the same entry and deviation in both modes, in the
+    directional and the adjoint derivative and in Initialization Mode is DAE740's finding in
+    DAE mode, and its evidence names the five other places."""
     report = checked(build_scene("SimpleDAE", defines=["DEFECT_WRONG_JACOBIAN"]),
                        options=EngineOptions(probes=True))
-    modes = {f.evidence_dict().get("mode") for f in report.findings
-             if f.name == "directional-derivative-mismatch"}
-    assert modes == {"DAE mode", "ODE mode"}
+    (finding,) = [f for f in report.findings if f.severity >= Severity.WARNING]
+    assert (finding.code, finding.subject) == ("DAE740", "d(der(x1))/d(x1)")
+    ev = thaw(finding.evidence)
+    assert ev["mode"] == "DAE mode" and ev["place"] == "fmi3GetDirectionalDerivative, DAE mode"
+    assert [(a["rule"], a["where"]) for a in ev["also"]] == [
+        ("DAE740", "fmi3GetDirectionalDerivative, ODE mode"),
+        ("DAE741", "fmi3GetAdjointDerivative, DAE mode"),
+        ("DAE741", "fmi3GetAdjointDerivative, ODE mode"),
+        ("DAE752", "fmi3GetDirectionalDerivative, Initialization Mode, DAE mode"),
+        ("DAE752", "fmi3GetDirectionalDerivative, Initialization Mode, ODE mode")]
+    assert "in 5 more places" in finding.message
 
 
 def test_a_fault_of_ode_mode_alone_leaves_dae_mode_clean():

@@ -17,3 +17,8 @@ def test_a_violation_crosses_the_process_boundary_whole():
     assert violation_from_json(json.loads(json.dumps(violation_json(sent)))) == sent
     plain = Violation("x")
     assert violation_from_json(json.loads(json.dumps(violation_json(plain)))) == plain
+
+
+def test_the_cause_crosses_too():
+    sent = Violation("m", subject="d(a)/d(b)", cause="derivative entry d(a)/d(b), deviation -1")
+    assert violation_from_json(json.loads(json.dumps(violation_json(sent)))) == sent

@@ -83,7 +83,7 @@ def _against_fd(ctx: ProbeContext, s: Survey, which: str, code: str, *, rtol: fl
                   [(f"{entry} [{MODE_NAMES[s.mode]}]", err, tol) for entry, err, tol in errors])
     found = [replace(v, part=part) for v in entry_violations(
         s, worst, f"{fmi} gives {{subject}} that finite differences of the function do not "
-        "confirm")]
+        "confirm", place=f"{fmi}, {MODE_NAMES[s.mode]}")]
     return failures + found, worst
 
 

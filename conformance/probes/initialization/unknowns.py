@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterator
+from dataclasses import replace
 
 import numpy as np
 
@@ -222,9 +223,9 @@ def _directional(s: InitialSurvey, *, rtol: float, margin: float, ulps: float,
     for v in entry_violations(
             s, worst, "fmi3GetDirectionalDerivative in Initialization Mode "
             f"({MODES.get(s.mode)}) gives {{subject}} that finite differences of the initial "
-            "unknowns do not confirm"):
-        yield Violation(v.message, v.location, evidence(_where(s), **dict(v.evidence)),
-                        subject=v.subject)
+            "unknowns do not confirm",
+            place=f"fmi3GetDirectionalDerivative, Initialization Mode, {MODES.get(s.mode)}"):
+        yield replace(v, evidence=evidence(_where(s), **dict(v.evidence)))
 
 
 PROBES = {

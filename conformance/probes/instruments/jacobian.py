@@ -15,7 +15,7 @@ evidence, and the per-FMU ``probe_errors`` the HTML report plots.
 from __future__ import annotations
 
 import logging
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Callable, Iterable, Iterator, TypeVar
 
 import numpy as np
@@ -262,9 +262,8 @@ def mode_evidence(s: Survey) -> dict:
 def in_mode(violations: Iterable[Violation], s: Survey) -> Iterator[Violation]:
     """The violations of a survey with its mode added to message and evidence."""
     for v in violations:
-        yield Violation(f"{v.message} ({MODE_NAMES[s.mode]})", v.location,
-                        evidence(mode_evidence(s), **dict(v.evidence)), subject=v.subject,
-                        rule=v.rule, part=v.part)
+        yield replace(v, message=f"{v.message} ({MODE_NAMES[s.mode]})",
+                      evidence=evidence(mode_evidence(s), **dict(v.evidence)))
 
 
 def record_errors(ctx: ProbeContext, code: str, items: list[tuple[str, float, float]]) -> None:

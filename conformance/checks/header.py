@@ -11,6 +11,7 @@ from typing import Iterator
 from .context import CheckContext
 from ..model.drafts.detect import ALPHA1, ALPHA1_DESCRIPTION, ALPHA1_NAME, ALPHA1_VERSION
 from ..report.findings import Location, Violation, evidence
+from ..model.drafts.migrate import LEGACY_SHAPE_CAUSE
 from ..model.manifest import MANIFEST, Manifest
 
 MANIFEST_FILE = "fmi-ls-manifest.xml"
@@ -128,7 +129,8 @@ def ls_name_mismatch(ctx: CheckContext) -> Iterator[Violation]:
             'the manifest\'s {subject} is not "%s"; importers recognise the layered standard '
             "by this exact reverse-DNS name" % ALPHA1_NAME,
             _root(m, attribute), evidence(expected=ALPHA1_NAME, actual=m.ls_name),
-            subject=attribute, part="legacy-shape-name" if legacy else None)
+            subject=attribute, part="legacy-shape-name" if legacy else None,
+            cause=LEGACY_SHAPE_CAUSE if legacy else None)
 
 
 def ls_version_invalid(ctx: CheckContext) -> Iterator[Violation]:
@@ -168,7 +170,7 @@ def ls_version_invalid(ctx: CheckContext) -> Iterator[Violation]:
             "the manifest's {subject} is not a version number (MAJOR.MINOR.PATCH); "
             'the current version is "%s"' % ALPHA1_VERSION,
             loc, evidence(actual=version, expected=ALPHA1_VERSION, reason="not a version"),
-            subject=attribute, part="legacy-not-version-like")
+            subject=attribute, part="legacy-not-version-like", cause=LEGACY_SHAPE_CAUSE)
 
 
 def _description_difference(actual: str) -> str:
@@ -204,7 +206,8 @@ def ls_description_mismatch(ctx: CheckContext) -> Iterator[Violation]:
             _root(m, attribute),
             evidence(expected=ALPHA1_DESCRIPTION, actual=m.ls_description,
                      difference=_description_difference(m.ls_description)),
-            subject=attribute, part="legacy-shape-text" if legacy else None)
+            subject=attribute, part="legacy-shape-text" if legacy else None,
+            cause=LEGACY_SHAPE_CAUSE if legacy else None)
 
 
 CHECKS = {

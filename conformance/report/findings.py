@@ -85,7 +85,7 @@ class Violation:
     (``[[rule.parts]]`` in the catalogue); None is the rule's own verdict. ``cause`` names the
     defect itself, where several probes can see one defect (the same derivative entry and
     deviation in several functions, modes or states): violations with the same cause are one
-    finding, the others listed in its evidence (``conformance.probes.machinery.runner``).
+    finding, the others listed in its evidence (``conformance.run.causes``).
     """
 
     message: str

@@ -1,5 +1,8 @@
 """Violations in, findings out: the rule, its severity, grouping and the source line.
 
+One defect is one finding: violations that name the same cause are folded first
+(:mod:`.causes`).
+
 :class:`Collector` keeps the violations of the rules that the
 :class:`~conformance.run.options.RuleSelection` enables, groups repeated ones into one finding
 with a count, and adds the source line each finding points at (:class:`LineCache`).
@@ -11,6 +14,7 @@ from dataclasses import replace
 from typing import Iterable, Protocol
 
 from ..report.catalogue import RuleSpec
+from .causes import fold_causes
 from .options import RuleSelection
 from ..report.findings import Finding, Location, Violation, evidence
 
@@ -57,7 +61,7 @@ class Collector:
 
     def findings(self) -> tuple[Finding, ...]:
         groups: dict[tuple[str, str | None, str, str], list[tuple[RuleSpec, Violation]]] = {}
-        for rule, v in self.items:
+        for rule, v in fold_causes(self.items, self.selection.severity_of):
             key = (rule.code, v.part, v.message, v.location.file or "")
             groups.setdefault(key, []).append((rule, v))
         out: list[Finding] = []

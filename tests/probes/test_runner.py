@@ -362,28 +362,3 @@ def test_call_record_round_trip():
     assert CallRecord.parse(record.buffer)[2] is False
     assert CallRecord.parse(b"") == ("", "", False)
 
-
-def test_violations_of_one_cause_are_one_finding_wherever_they_were_seen():
-    """fold_causes: the same cause in several probes and places is the first's finding (in the
-    order of codes, then places), with the others in its evidence; other causes, and
-    violations without one, are left alone, whatever order the workers gave them in."""
-    from conformance.report.findings import Violation, evidence
-
-    def v(place: str, cause: str | None, subject: str = "d(a)/d(b)") -> Violation:
-        return Violation(f"{{subject}} is wrong in {place}", evidence=evidence(place=place),
-                         subject=subject, cause=cause)
-
-    items = [("DAE752", v("init", "c1")), ("DAE741", v("adjoint", "c1")),
-             ("DAE740", v("ode", "c1")), ("DAE740", v("dae", "c1")),
-             ("DAE740", v("dae", "c2", "d(x)/d(y)")), ("DAE742", v("dae", None))]
-    for order in (items, items[::-1]):
-        outcome = runner.ProbeOutcome()
-        outcome.violations.extend(order)
-        runner.fold_causes(outcome)
-        kept = sorted((c, x.subject, x.text) for c, x in outcome.violations)
-        assert [c for c, *_ in kept] == ["DAE740", "DAE740", "DAE742"]
-        (first,) = [x for c, x in outcome.violations if x.cause == "c1"]
-        assert first.text.startswith("'d(a)/d(b)' is wrong in dae; the same entry and "
-                                     "deviation in 3 more places: ode; adjoint; init")
-        assert [(a["rule"], a["where"]) for a in thaw(dict(first.evidence)["also"])] == [
-            ("DAE740", "ode"), ("DAE741", "adjoint"), ("DAE752", "init")]

@@ -46,6 +46,11 @@ _MAX_LISTED = 12
 # Violations
 
 
+#: The cause a legacy manifest's shape names (``Violation.cause``): legacy-draft-shape, and the
+#: header texts the shape implies, which its migration sets (one defect, one finding).
+LEGACY_SHAPE_CAUSE = "legacy draft shape"
+
+
 def legacy_violations(root: etree._Element, draft: str, *, file: str) -> Iterator[Violation]:
     """One ``legacy-draft-shape`` violation for a manifest of a legacy draft; nothing otherwise."""
     if draft not in LEGACY_DRAFTS:
@@ -76,6 +81,7 @@ def legacy_violations(root: etree._Element, draft: str, *, file: str) -> Iterato
         ),
         subject=draft,
         rule="legacy-draft-shape",
+        cause=LEGACY_SHAPE_CAUSE,
     )
 
 

@@ -218,7 +218,7 @@ def entry_violations(s: Survey, worst: dict, message: str, *, place: str
     was seen (the function, and the mode or state); the cause is the entry and its deviation,
     the FMU's value less the finite difference (three significant digits): a wrong partial
     derivative that the directional and the adjoint derivative, both modes or Initialization
-    Mode all give is one defect, one finding (``machinery.runner.fold_causes``)."""
+    Mode all give is one defect, one finding (``conformance.run.causes``)."""
     layout = s.layout
     assert layout is not None
     for (i, j), w in sorted(worst.items()):

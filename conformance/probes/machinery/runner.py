@@ -30,10 +30,10 @@ The endurance probes (``conformance.probes.endurance.sustained``) run after the 
 at the level the engine passes (``endurance``: "quick" or "long", handed to the worker in the
 job); at "off" the runner skips them with that reason and they cost nothing.
 
-Once every worker has ended, two folds make one defect one finding: :func:`fold_consequences`
-(what vanishes with every instance alone is instances-not-independent's) and
-:func:`fold_causes` (violations that name the same cause, seen by several probes, are the
-first's finding).
+Once every worker has ended, :func:`fold_consequences` makes one defect one finding: what
+vanishes with every instance alone is instances-not-independent's. Violations that name the
+same cause (``Violation.cause``) are folded by the engine's collector
+(``conformance.run.causes``), for probes and static checks alike.
 """
 from __future__ import annotations
 
@@ -194,7 +194,6 @@ class _Run:
         finally:
             shutil.rmtree(tmp, ignore_errors=True)
         fold_consequences(self.outcome)
-        fold_causes(self.outcome)
         return self.outcome
 
     def _drive(self, tmp: str, probes: list[RuleSpec]) -> None:
@@ -279,41 +278,3 @@ def fold_consequences(outcome: ProbeOutcome) -> None:
             {"rule": rule, "subject": v.subject, "message": v.text}
             for rule, v in outcome.consequences])))
 
-
-def fold_causes(outcome: ProbeOutcome) -> None:
-    """One defect, one finding: violations that name the same cause (``Violation.cause``: the
-    same derivative entry and deviation, seen by the directional and the adjoint derivative,
-    in DAE and ODE mode, in Continuous-Time and Initialization Mode) are folded into the first
-    of them, in the order of their codes and then of where they were seen (so one worker or two
-    give the same finding); its message counts the others and names where, and its evidence
-    lists each (``also``: rule, where, message)."""
-    groups: dict[str, list[int]] = {}
-    for k, (_, v) in enumerate(outcome.violations):
-        if v.cause:
-            groups.setdefault(v.cause, []).append(k)
-    dropped: set[int] = set()
-    for members in groups.values():
-        if len(members) < 2:
-            continue
-        members.sort(key=lambda k: _seen_order(outcome.violations[k]))
-        first, rest = members[0], members[1:]
-        code, owner = outcome.violations[first]
-        also = [(c, _seen(v), v) for c, v in (outcome.violations[k] for k in rest)]
-        where = "; ".join(seen or c for c, seen, _ in also)
-        outcome.violations[first] = (code, replace(
-            owner, message=owner.message + (
-                f"; the same entry and deviation in {len(also)} more "
-                f"place{'s' if len(also) > 1 else ''}: {where}"),
-            evidence=owner.evidence + evidence(also=[
-                {"rule": c, "where": seen, "message": v.text} for c, seen, v in also])))
-        dropped.update(rest)
-    outcome.violations[:] = [x for k, x in enumerate(outcome.violations) if k not in dropped]
-
-
-def _seen(v: Violation) -> str:
-    return str(dict(v.evidence).get("place", ""))
-
-
-def _seen_order(item: tuple[str, Violation]) -> tuple[str, str, str]:
-    code, v = item
-    return (code, _seen(v), v.text)

@@ -1,0 +1,56 @@
+"""One defect, one finding: violations that name the same cause fold into one (issue 29.3)."""
+from __future__ import annotations
+
+from conformance.report.catalogue import default_catalogue
+from conformance.report.findings import Severity, Violation, evidence, thaw
+from conformance.run.causes import fold_causes
+
+CATALOGUE = default_catalogue()
+
+
+def _v(place: str, cause: str | None, subject: str = "d(a)/d(b)") -> Violation:
+    return Violation(f"{{subject}} is wrong in {place}", evidence=evidence(place=place),
+                     subject=subject, cause=cause)
+
+
+def _severity(rule, part) -> Severity:
+    return rule.severity_of(part)
+
+
+def test_violations_of_one_cause_are_one_finding_wherever_they_were_seen():
+    """The same cause in several rules and places is the first's finding (in the order of codes,
+    then places), with the others in its evidence; other causes, and violations without one,
+    are left alone, whatever order the probe workers gave them in."""
+    items = [(CATALOGUE["DAE752"], _v("init", "c1")), (CATALOGUE["DAE741"], _v("adjoint", "c1")),
+             (CATALOGUE["DAE740"], _v("ode", "c1")), (CATALOGUE["DAE740"], _v("dae", "c1")),
+             (CATALOGUE["DAE740"], _v("dae", "c2", "d(x)/d(y)")),
+             (CATALOGUE["DAE742"], _v("dae", None))]
+    for order in (items, items[::-1]):
+        kept = fold_causes(order, _severity)
+        assert sorted(r.code for r, _ in kept) == ["DAE740", "DAE740", "DAE742"]
+        (first,) = [v for _, v in kept if v.cause == "c1"]
+        assert first.text == ("'d(a)/d(b)' is wrong in dae; the same defect in 3 more places: "
+                              "ode; adjoint; init")
+        assert [(a["rule"], a["where"]) for a in thaw(dict(first.evidence)["also"])] == [
+            ("DAE740", "ode"), ("DAE741", "adjoint"), ("DAE752", "init")]
+
+
+def test_the_weightiest_finding_keeps_the_folded_ones():
+    """A cause seen as an error and as information is the error's finding."""
+    info = CATALOGUE["DAE743"]                       # advice: information
+    error = CATALOGUE["DAE744"]
+    assert info.severity == Severity.INFO and error.severity == Severity.ERROR
+    kept = fold_causes([(info, _v("a", "c")), (error, _v("b", "c"))], _severity)
+    assert [(r.code, v.text.split(";")[0]) for r, v in kept] == [
+        ("DAE744", "'d(a)/d(b)' is wrong in b")]
+
+
+def test_a_violation_without_a_place_is_named_by_its_subject():
+    kept = fold_causes([(CATALOGUE["DAE021"], Violation("legacy", subject="formulation",
+                                                         cause="legacy")),
+                        (CATALOGUE["DAE104"], Violation("{subject} differs",
+                                                        subject="fmi-ls-description",
+                                                        cause="legacy"))], _severity)
+    ((rule, v),) = kept
+    assert rule.code == "DAE021"
+    assert v.text == "legacy; the same defect in 1 more place: 'fmi-ls-description'"

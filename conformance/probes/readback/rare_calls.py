@@ -109,15 +109,22 @@ def _derivative(inst: Instance, fname: str, unknowns: list[int], knowns: list[in
               out.ctypes.data_as(ctypes.POINTER(ctypes.c_double)), n_sens)
 
 
-def _cases(ctx: ProbeContext, mode: str) -> Iterator[tuple[str, str, int, Any]]:
-    """(what, digest id, value reference it is about, the call on a fresh instance)."""
+#: The kinds of illegal call: one defect each, whichever function and mode accept it (the
+#: cause of the violations, folded into one finding by the engine).
+_KINDS = {"SG-09": "a setter of another type", "PD-05": "an output as a known",
+          "PD-01": "wrong counts of seeds or sensitivities"}
+
+
+def _cases(ctx: ProbeContext, mode: str) -> Iterator[tuple[str, str, int, Any, str]]:
+    """(what, digest id, value reference it is about, the call on a fresh instance, the call
+    and argument in a few words)."""
     layout = layout_of(ctx)
     states = list(layout.states_for(mode))
     derivatives = list(layout.derivatives_for(mode))
     if mode == "ode" and layout.enable is not None and states:
         float_vr = states[0]
         yield ("fmi3SetBoolean on the Float64 variable {subject} in Configuration Mode", "SG-09",
-               float_vr, lambda inst: _set_boolean(inst, float_vr))
+               float_vr, lambda inst: _set_boolean(inst, float_vr), "fmi3SetBoolean")
     if not (derivatives and states):
         return
     knowns_ok = set(states) | set(layout.inputs) | (set(layout.algebraic) if mode == "dae"
@@ -134,18 +141,18 @@ def _cases(ctx: ProbeContext, mode: str) -> Iterator[tuple[str, str, int, Any]]:
             n_seed, n_sens = (1, 1)
             yield (f"{fname} with the output {{subject}} given as a known", "PD-05",
                    out, lambda inst, f=fname, o=out, a=n_seed, b=n_sens:
-                   _derivative(inst, f, unknown, [o], a, b))
+                   _derivative(inst, f, unknown, [o], a, b), f"{fname} (an output known)")
         knowns = states[:2]
         n_u, n_k = len(unknown), len(knowns)
         right_seed, right_sens = (n_u, n_k) if adjoint else (n_k, n_u)
         yield (f"{fname} with nSeed = {right_seed - 1} for {right_seed} seeded value(s) "
                "(of {subject} ...)", "PD-01", knowns[0],
                lambda inst, f=fname, s=right_seed, t=right_sens:
-               _derivative(inst, f, unknown, knowns, s - 1, t))
+               _derivative(inst, f, unknown, knowns, s - 1, t), f"{fname} (nSeed)")
         yield (f"{fname} with nSensitivity = {right_sens + 1} for {right_sens} value(s) "
                "(of {subject} ...)", "PD-01", knowns[0],
                lambda inst, f=fname, s=right_seed, t=right_sens:
-               _derivative(inst, f, unknown, knowns, s, t + 1))
+               _derivative(inst, f, unknown, knowns, s, t + 1), f"{fname} (nSensitivity)")
 
 
 def _set_boolean(inst: Instance, vr: int) -> None:
@@ -164,7 +171,7 @@ def illegal_call_accepted(ctx: ProbeContext) -> Iterator[Violation]:
         raise ProbeSkipped("no mode of the FMU could be started")
     # an FMU without an enable parameter, states or partial derivatives has no call to refuse
     for mode in started:
-        for what, spec, vr, call in _cases(ctx, mode):
+        for what, spec, vr, call, label in _cases(ctx, mode):
             configuration = what.startswith("fmi3SetBoolean")
             try:
                 inst = new_instance(library, mode) if configuration else ctx.new_instance(mode)
@@ -175,12 +182,15 @@ def illegal_call_accepted(ctx: ProbeContext) -> Iterator[Violation]:
             finally:
                 inst.free()
             if error is None:
+                call_name = what.split(" ")[0]
                 yield Violation(
-                    f"{what} is accepted ({MODE_NAMES[mode]}; fmi3OK or fmi3Warning): an "
-                    "illegal call should give fmi3Error; an importer's mistake goes unnoticed "
-                    "and the FMU computes with what it was not given", var_location(ctx, vr),
-                    evidence(mode=mode, spec=spec, call=what.split(" ")[0]),
-                    subject=layout.name(vr))
+                    f"{what} is accepted ({MODE_NAMES[mode]}; fmi3OK or fmi3Warning): the FMU "
+                    "does not detect this illegal call (FMI asks for fmi3Error only from an FMU "
+                    "that detects one), so an importer's mistake goes unnoticed and the FMU "
+                    "computes with what it was not given", var_location(ctx, vr),
+                    evidence(mode=mode, spec=spec, call=call_name,
+                             place=f"{label}, {MODE_NAMES[mode]}"),
+                    subject=layout.name(vr), cause=f"illegal call accepted: {_KINDS[spec]}")
 
 
 PROBES = {

@@ -233,8 +233,13 @@ class Diagnosis:
                 ev + evidence(limit_mib=limit_mib), subject=call or probe))
         else:
             illegal = facts["call_in_progress"] and call in ILLEGAL_CALLS.get(probe, ())
+            # the same crash (the call in progress, the same way of dying) reached by several
+            # probes is one defect: one finding, the probes listed in its evidence
+            same = f"the binary crashed ({how}) during {call}" \
+                if call and facts["call_in_progress"] else None
             self.run.emit(CRASHED, Violation(
                 f"the binary crashed ({how}) {where}, in {self.run.names(probe)}",
-                Location(file=self.run.binary), ev, subject=call or probe,
-                part="crash-on-illegal-call" if illegal else None))
+                Location(file=self.run.binary),
+                ev + evidence(place=self.run.names(probe)), subject=call or probe,
+                part="crash-on-illegal-call" if illegal else None, cause=same))
         return probe, ""

@@ -88,6 +88,7 @@ class Basis:
                                       self.section) if x)
         return f"{where}: \u201c{self.word}\u201d" if where else self.word
 
+
 class CatalogueError(Exception):
     """The catalogue itself is inconsistent (a defect of ours, caught by the tests)."""
 

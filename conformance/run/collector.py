@@ -75,8 +75,9 @@ class Collector:
         return tuple(sorted(set(out), key=Finding.sort_key))
 
     def _single(self, rule: RuleSpec, v: Violation) -> Finding:
-        return Finding(rule.code, rule.name, self.selection.severity_of(rule, v.part), v.text,
-                       v.location, v.evidence, v.subject, part=v.part)
+        return Finding(rule.code, rule.name, self.selection.severity_of(rule, v.part),
+                       limit_said(rule, v.part, v.text), v.location, v.evidence, v.subject,
+                       part=v.part)
 
     def _grouped(self, members: list[tuple[RuleSpec, Violation]]) -> Finding:
         members = sorted(members, key=lambda m: m[1].location.sort_key())
@@ -92,7 +93,17 @@ class Collector:
             count=len(members), subjects=subjects[:20],
             lines=[v.location.line for _, v in members[:20]])
         return Finding(rule.code, rule.name, self.selection.severity_of(rule, first.part),
-                       message, first.location, ev, None, len(members), part=first.part)
+                       limit_said(rule, first.part, message), first.location, ev, None,
+                       len(members), part=first.part)
+
+
+def limit_said(rule: RuleSpec, part: str | None, message: str) -> str:
+    """A finding whose basis is one of lsdae's own limits says so, and how to raise the limit
+    (the basis's word), so that it never reads as a verdict on the FMU."""
+    basis = rule.part(part)
+    if basis is None or basis.kind != "limit":
+        return message
+    return f"{message} (lsdae's own limit, not a verdict on the FMU: {basis.word})"
 
 
 # The verbs that follow "{subject}" in messages, in the third person singular, and their plural.

@@ -54,3 +54,20 @@ def test_a_violation_without_a_place_is_named_by_its_subject():
     ((rule, v),) = kept
     assert rule.code == "DAE021"
     assert v.text == "legacy; the same defect in 1 more place: 'fmi-ls-description'"
+
+
+def test_a_limit_of_lsdae_says_so_and_how_to_raise_it():
+    """A finding whose basis is lsdae's own limit (issue 29: kind limit, a warning) names the
+    limit and how to raise it, in the message every reporter shows; other findings do not."""
+    from conformance.run.collector import Collector
+    from conformance.run.options import EngineOptions, RuleSelection
+
+    collector = Collector(RuleSelection(CATALOGUE, EngineOptions()), {}, threshold=5)
+    collector.add(CATALOGUE["DAE702"], [Violation("the binary did not respond in 60 s")])
+    collector.add(CATALOGUE["DAE740"], [Violation("{subject} is wrong", subject="d(a)/d(b)")])
+    limit, verdict = sorted(collector.findings(), key=lambda f: f.code)
+    assert limit.code == "DAE702" and limit.severity == Severity.WARNING
+    assert limit.message == ("the binary did not respond in 60 s (lsdae's own limit, not a "
+                             f"verdict on the FMU: {CATALOGUE['DAE702'].basis.word})")
+    assert "--rule-option DAE702.probe_seconds" in limit.message
+    assert verdict.message == "'d(a)/d(b)' is wrong"

@@ -227,10 +227,18 @@ class Diagnosis:
             self.run.outcome.run.add(probe)
         ev = evidence(facts, exit=how, **self._stderr_evidence())
         if memory:
+            # the FMI calls took the memory and another call's allocation found it gone: the
+            # finding names the call that took it (the last that grew the address space)
+            took = grew if grew and grown >= FMU_SHARE * (limit_mib << 20) else ""
             self.run.emit(MEMORY, Violation(
                 f"the binary exhausted the {limit_mib} MiB address-space limit {where}, in "
-                f"{self.run.names(probe)} ({how})", Location(file=self.run.binary),
-                ev + evidence(limit_mib=limit_mib), subject=call or probe))
+                f"{self.run.names(probe)} ({how})" + (
+                    f"; its FMI calls grew the address space by {grown / (1 << 20):,.0f} MiB, "
+                    f"the last of them {took}" if took and took != call else ""),
+                Location(file=self.run.binary),
+                ev + evidence(limit_mib=limit_mib, **({"grown_in_fmi_calls_mib": round(
+                    grown / (1 << 20)), "last_growing_call": took} if took else {})),
+                subject=took or call or probe))
         else:
             illegal = facts["call_in_progress"] and call in ILLEGAL_CALLS.get(probe, ())
             # the same crash (the call in progress, the same way of dying) reached by several

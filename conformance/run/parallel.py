@@ -16,6 +16,7 @@ from pathlib import Path
 from typing import Callable, Sequence
 
 from ..report.catalogue import Catalogue, default_catalogue
+from .collector import limit_said
 from .engine import EngineOptions, check_fmu, check_paths
 from .options import RuleSelection
 from ..report.findings import Finding, FmuReport, Location, Report, evidence
@@ -93,6 +94,6 @@ def crashed(path: str, message: str, options: EngineOptions, catalogue: Catalogu
     """
     rule = catalogue["internal-error"]
     severity = RuleSelection(catalogue, options).severity[rule.code]
-    finding = Finding(rule.code, rule.name, severity, message, Location(),
-                      evidence(stage="worker"))
+    finding = Finding(rule.code, rule.name, severity, limit_said(rule, None, message),
+                      Location(), evidence(stage="worker"))
     return FmuReport(path=path, draft=None, findings=(finding,))

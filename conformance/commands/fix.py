@@ -71,8 +71,9 @@ def fix_fmu(source: Path, *, options: EngineOptions | None = None,
     """The fixes for one FMU (nothing written): the safe ones proven by static re-checks; with
     ``unsafe``, then the fixes from the probes' observations, proven by re-checks with them."""
     # Every violation its own finding, so that a fixer sees the evidence of each, not of the
-    # first of a group.
-    options = dataclasses.replace(options or EngineOptions(), group_threshold=UNGROUPED)
+    # first of a group or of a cause.
+    options = dataclasses.replace(options or EngineOptions(), group_threshold=UNGROUPED,
+                                  fold=False)
     static = dataclasses.replace(options, probes=False, probes_only=False)
     catalogue = default_catalogue()
     original = check_fmu(source, options=static, catalogue=catalogue)

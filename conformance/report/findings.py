@@ -84,8 +84,9 @@ class Violation:
     names the sub-check of the rule whose basis (and so severity) differs from the rule's own
     (``[[rule.parts]]`` in the catalogue); None is the rule's own verdict. ``cause`` names the
     defect itself, where several probes can see one defect (the same derivative entry and
-    deviation in several functions, modes or states): violations with the same cause are one
-    finding, the others listed in its evidence (``conformance.run.causes``).
+    deviation in several functions, modes or states): one key, or several (an entry names its
+    unknown and its known). Violations that share a key are one finding, the others listed in
+    its evidence (``conformance.run.causes``).
     """
 
     message: str
@@ -94,7 +95,7 @@ class Violation:
     subject: str | None = None
     rule: str | None = None
     part: str | None = None
-    cause: str | None = None
+    cause: str | tuple[str, ...] | None = None
 
     @property
     def text(self) -> str:

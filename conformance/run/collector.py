@@ -1,7 +1,8 @@
 """Violations in, findings out: the rule, its severity, grouping and the source line.
 
-One defect is one finding: violations that name the same cause are folded first
-(:mod:`.causes`).
+One defect is one finding: after grouping, violations that name a shared cause are folded
+(:mod:`.causes`), unless the options ask for every violation (``fold=False``: ``lsdae fix``,
+whose fixers read each one).
 
 :class:`Collector` keeps the violations of the rules that the
 :class:`~conformance.run.options.RuleSelection` enables, groups repeated ones into one finding
@@ -14,7 +15,7 @@ from dataclasses import replace
 from typing import Iterable, Protocol
 
 from ..report.catalogue import RuleSpec
-from .causes import fold_causes
+from .causes import cause_keys, fold_indexed
 from .options import RuleSelection
 from ..report.findings import Finding, Location, Violation, evidence
 
@@ -32,10 +33,12 @@ class Texts(Protocol):
 class Collector:
     """Accumulates violations per rule and turns them into grouped, located findings."""
 
-    def __init__(self, selection: RuleSelection, texts: Texts, threshold: int):
+    def __init__(self, selection: RuleSelection, texts: Texts, threshold: int, *,
+                 fold: bool = True):
         self.selection = selection
         self.texts = texts
         self.threshold = threshold
+        self.fold = fold
         self.items: list[tuple[RuleSpec, Violation]] = []
 
     def add(self, rule: RuleSpec, violations: Iterable[Violation]) -> None:
@@ -61,40 +64,56 @@ class Collector:
 
     def findings(self) -> tuple[Finding, ...]:
         groups: dict[tuple[str, str | None, str, str], list[tuple[RuleSpec, Violation]]] = {}
-        for rule, v in fold_causes(self.items, self.selection.severity_of):
+        for rule, v in self.items:
             key = (rule.code, v.part, v.message, v.location.file or "")
             groups.setdefault(key, []).append((rule, v))
-        out: list[Finding] = []
+        units: list[tuple[RuleSpec, Violation]] = []
+        counts: list[int] = []
+        labels: list[str | None] = []
         for members in groups.values():
             if len(members) > self.threshold:
-                out.append(self._grouped(members))
+                rule, v, label = _grouped(members)
+                units.append((rule, v))
+                counts.append(len(members))
+                labels.append(label)
             else:
-                out.extend(self._single(rule, v) for rule, v in members)
+                units.extend(members)
+                counts.extend([1] * len(members))
+                labels.extend([None] * len(members))
+        out: list[Finding] = []
+        kept = (fold_indexed(units, self.selection.severity_of, labels) if self.fold
+                else list(enumerate(units)))
+        for k, (rule, v) in kept:
+            out.append(Finding(rule.code, rule.name, self.selection.severity_of(rule, v.part),
+                               limit_said(rule, v.part, v.text), v.location, v.evidence,
+                               v.subject, counts[k], part=v.part))
         lines = LineCache(self.texts)
         out = [replace(f, location=lines.with_snippet(f.location)) for f in out]
         return tuple(sorted(set(out), key=Finding.sort_key))
 
-    def _single(self, rule: RuleSpec, v: Violation) -> Finding:
-        return Finding(rule.code, rule.name, self.selection.severity_of(rule, v.part),
-                       limit_said(rule, v.part, v.text), v.location, v.evidence, v.subject,
-                       part=v.part)
 
-    def _grouped(self, members: list[tuple[RuleSpec, Violation]]) -> Finding:
-        members = sorted(members, key=lambda m: m[1].location.sort_key())
-        rule, first = members[0]
-        subjects = [v.subject for _, v in members if v.subject]
-        shown = ", ".join(f"'{s}'" for s in subjects[:GROUP_SHOWN])
-        more = ", …" if len(subjects) > GROUP_SHOWN else ""
-        if "{subject}" in first.message:
-            message = plural_subject(first.message, f"{len(members)} items ({shown}{more})")
-        else:
-            message = f"{first.message} ({len(members)} times)"
-        ev = first.evidence + evidence(
-            count=len(members), subjects=subjects[:20],
-            lines=[v.location.line for _, v in members[:20]])
-        return Finding(rule.code, rule.name, self.selection.severity_of(rule, first.part),
-                       limit_said(rule, first.part, message), first.location, ev, None,
-                       len(members), part=first.part)
+def _grouped(members: list[tuple[RuleSpec, Violation]]
+             ) -> tuple[RuleSpec, Violation, str]:
+    """Violations of one rule with one message as one: the count and the first few subjects in
+    the message, the first's evidence; the cause keys of all (they fold as one); and how to
+    name the group among the places of another finding."""
+    members = sorted(members, key=lambda m: m[1].location.sort_key())
+    rule, first = members[0]
+    subjects = [v.subject for _, v in members if v.subject]
+    shown = ", ".join(f"'{s}'" for s in subjects[:GROUP_SHOWN])
+    more = ", …" if len(subjects) > GROUP_SHOWN else ""
+    if "{subject}" in first.message:
+        message = plural_subject(first.message, f"{len(members)} items ({shown}{more})")
+    else:
+        message = f"{first.message} ({len(members)} times)"
+    ev = first.evidence + evidence(
+        count=len(members), subjects=subjects[:20],
+        lines=[v.location.line for _, v in members[:20]])
+    keys = tuple(dict.fromkeys(k for _, v in members for k in cause_keys(v)))
+    place = str(dict(first.evidence).get("place", ""))
+    label = f"{len(members)} items ({shown}{more})" + (f", {place}" if place else "")
+    return rule, replace(first, message=message, evidence=ev, subject=None,
+                         cause=keys or None), label
 
 
 def limit_said(rule: RuleSpec, part: str | None, message: str) -> str:

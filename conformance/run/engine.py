@@ -47,7 +47,7 @@ def check_fmu(path: Path, *, options: EngineOptions = EngineOptions(),
     selection = RuleSelection(catalogue, options)
     limits = ArchiveLimits.from_options(catalogue["archive-too-large"].option_values)
     texts = SourceTexts(Path(path), limits)
-    collector = Collector(selection, texts, options.group_threshold)
+    collector = Collector(selection, texts, options.group_threshold, fold=options.fold)
     state = RunState()
     try:
         with _cyclic_gc_paused():

@@ -23,6 +23,7 @@ class EngineOptions:
     probes_only: bool = False
     seed: int = 0
     group_threshold: int = 3
+    fold: bool = True                 # one finding per cause (``conformance.run.causes``)
     endurance: str = "quick"          # the endurance probes: "off", "quick" or "long"
     probe_workers: int = 0            # probe workers at once, 1 or 2; 0: by the FMU's size
 

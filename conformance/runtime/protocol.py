@@ -61,4 +61,4 @@ def violation_from_json(data: dict[str, Any]) -> Any:
     file, line, column, path = (list(data.get("location") or []) + [None] * 4)[:4]
     return Violation(str(data.get("message", "")), Location(file, line, column, path),
                      _tuples(data.get("evidence") or []), data.get("subject"), data.get("rule"),
-                     data.get("part"), data.get("cause"))
+                     data.get("part"), _tuples(data.get("cause")))

@@ -23,7 +23,7 @@ from lxml import etree
 
 from conformance.model.description import read_model_description
 from conformance.probes.evaluation.readable import STATES, readable
-from conformance.report.findings import Finding
+from conformance.report.findings import Finding, thaw
 from conformance.run.engine import EngineOptions, check_fmu
 from tests.checkkit import checked
 from tests.fixtures import SCENES_DIR, build_scene, variant
@@ -31,11 +31,13 @@ from tests.fixtures import SCENES_DIR, build_scene, variant
 
 def _findings(scene: str, defines: tuple[str, ...], code: str,
               also: tuple[str, ...] = ()) -> list[Finding]:
-    """The findings of ``code``. Each test here looks at its rule's findings alone, so only the
-    probes of ``code`` and ``also`` run (test_defects.py checks one member of each family with
-    every probe); the report is kept for the next test that asks the same."""
+    """The findings of ``code``, each violation its own (not folded by cause: the tests here
+    look at each variable's evidence). Each test here looks at its rule's findings alone, so
+    only the probes of ``code`` and ``also`` run (test_defects.py checks one member of each
+    family with every probe); the report is kept for the next test that asks the same."""
     report = checked(build_scene(scene, defines=list(defines)),
-                     options=EngineOptions(probes=True, select=tuple(sorted({code, *also}))))
+                     options=EngineOptions(probes=True, select=tuple(sorted({code, *also})),
+                                           fold=False))
     return [f for f in report.findings if f.code == code]
 
 
@@ -76,6 +78,21 @@ def test_every_readable_variable_reads_back_in_every_state_and_mode(scene, defin
     part = {"refused": "refused-in-instantiated" if state == "Instantiated" else
             "refused-after-initialization", "nan": "nan-read-back", "unwritten": "unwritten"}
     assert {f.part for f in findings if f.subject == variable} == {part[problem]}
+
+
+def test_reads_refused_in_one_state_are_one_finding():
+    """EventDAE refuses every discrete variable in Initialization Mode: one getter defect, one
+    finding (issue 29), its first variable's, with each other variable in its evidence."""
+    report = checked(build_scene("EventDAE", defines=["DEFECT_GET_REFUSED", "READ_KIND=K_D"]),
+                     options=EngineOptions(probes=True, select=("DAE724",)))
+    (finding,) = [f for f in report.findings if f.code == "DAE724"]
+    unfolded = _findings("EventDAE", ("DEFECT_GET_REFUSED", "READ_KIND=K_D"), "DAE724")
+    assert len(unfolded) > 1
+    also = thaw(finding.evidence_dict()["also"])
+    assert {finding.subject, *(a["where"].strip("'") for a in also)} == {
+        f.subject for f in unfolded}
+    assert {a["rule"] for a in also} == {"DAE724"}
+    assert f"the same defect in {len(unfolded) - 1} more place" in finding.message
 
 
 def test_a_refused_event_indicator_variable_is_a_finding_not_a_rule_not_run():

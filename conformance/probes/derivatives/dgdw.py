@@ -18,6 +18,7 @@ from typing import Any, Iterator
 
 import numpy as np
 
+from ...report import causes
 from ...report.findings import Violation, evidence
 from ...numerics import numdiff
 from ...numerics.conditioning import conditioning
@@ -187,7 +188,8 @@ def _condition_violation(s: Survey, found: _Judged, message: str, **extra) -> Vi
         condition_number=cond if np.isfinite(cond) else "inf", size=b.g.shape[0],
         source=b.source, scale="columns by the algebraic variables' nominal values, rows by "
         "the residuals' nominal values or else equilibrated", involved=involved,
-        **found.details, **extra, point=point_evidence(layout, b.ps)))
+        **found.details, **extra, point=point_evidence(layout, b.ps)),
+        cause=tuple(causes.through(name) for name in involved) or None)
 
 
 def algebraic_jacobian_ill_conditioned(ctx: ProbeContext, *, max_condition: float,
@@ -254,7 +256,7 @@ def ode_dae_inconsistent(ctx: ProbeContext, *, rtol: float, margin: float,
             "ODE mode and DAE mode disagree: at the same time, states and inputs, the "
             "derivatives or outputs of ODE mode differ from those of DAE mode at the algebraic "
             "variables that solve the residuals", layout.rows[res_i[0]].location,
-            evidence(worst[1]))
+            evidence(worst[1]), cause=causes.through(worst[1]["worst"]))
 
 
 PROBES = {

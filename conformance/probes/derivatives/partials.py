@@ -29,6 +29,7 @@ from typing import Any, Iterator
 import numpy as np
 
 from ...numerics.intsets import isin_ints, unique_ints
+from ...report import causes
 from ...report.findings import Violation, evidence
 from ..instruments.api import FmiError, ProbeContext, ProbeSkipped
 from ..instruments.entry_comparison import (OPTIONS_FACT, call_failures, closest_entries,
@@ -201,7 +202,8 @@ def _undeclared(ctx: ProbeContext, s: Survey, *, rtol: float, margin: float,
                 entry=layout.entry(i, j), unknown=layout.rows[i].name,
                 known=layout.cols[j].name, known_value_reference=layout.cols[j].vr, **w.items,
                 point=point_evidence(layout, w.ps)), subject=layout.entry(i, j),
-            part="residual-dependencies" if residual else None)
+            part="residual-dependencies" if residual else None,
+            cause=causes.entry(layout.rows[i].name, layout.cols[j].name))
     if s.mode == "dae":
         yield from _reported_dependencies(ctx, layout, s.mode,
                                           part="reported-dependencies-dae-mode")
@@ -322,7 +324,8 @@ def _kind_violated(s: Survey, *, rtol: float, margin: float,
                      smallest=c.lo[0],
                      largest=c.hi[0], tolerance=c.tolerance,
                      points=[point_evidence(layout, c.lo[2]), point_evidence(layout, c.hi[2])]),
-            subject=layout.entry(i, j))
+            subject=layout.entry(i, j),
+            cause=causes.entry(layout.rows[i].name, layout.cols[j].name))
 
 
 PROBES = {

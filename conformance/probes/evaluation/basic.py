@@ -21,6 +21,7 @@ from typing import Iterator
 
 import numpy as np
 
+from ...report import causes
 from ...report.findings import Violation, evidence
 from ..instruments.api import FmiError, Point, ProbeContext
 from ..instruments.common import (close, dae_of, error_evidence, finite, fresh_instance, layout_of,
@@ -59,7 +60,7 @@ def algebraic_not_settable(ctx: ProbeContext, *, step: float, rtol: float,
                 "Continuous-Time Mode, DAE mode", manifest_location(ctx, vr,
                                                                     ("AlgebraicVariable",)),
                 evidence(error_evidence(exc), point=start.label, value=value),
-                layout.name(vr))
+                layout.name(vr), cause=causes.through(layout.name(vr)))
     if rejected:
         return
     watch = list(dict.fromkeys([*layout.residuals, *layout.derivatives]))
@@ -102,7 +103,7 @@ def _set_one(ctx: ProbeContext, dae: Instance, layout: Layout, start: Point, vr:
                 "the algebraic variable {subject} does not keep the value set in DAE mode: "
                 "the FMU overwrites it", where,
                 evidence(point=start.label, set=value, read_back=got, rtol=rtol), name,
-                part="value-not-kept")
+                part="value-not-kept", cause=causes.through(name))
             return
         after = dae.get_float64(watch)
         tried.append(value)
@@ -117,7 +118,7 @@ def _set_one(ctx: ProbeContext, dae: Instance, layout: Layout, start: Point, vr:
             "{subject} is set: the FMU does not use the value the importer gives it", where,
             evidence(point=start.label, values_set=tried, unknowns=[layout.name(w) for w in watch],
                      relative_tolerance=react_rtol, scale="nominal or magnitude of each unknown"),
-            name, part="no-effect")
+            name, part="no-effect", cause=causes.through(name))
 
 
 def _declared_anywhere(ctx: ProbeContext, vr: int) -> bool:

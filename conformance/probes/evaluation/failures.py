@@ -12,6 +12,7 @@ from typing import Any, Iterator
 
 import numpy as np
 
+from ...report import causes
 from ...report.findings import Location, Violation, evidence
 from ..instruments.api import FmiError, Point, ProbeContext, ProbeSkipped
 from ..instruments.common import (dae_of, error_evidence, layout_of, new_instance, renew,
@@ -202,7 +203,18 @@ def _read_back_finding(ctx: ProbeContext, vr: int, problem: str, faults: list[Fa
                  value_reference=vr, type=first.item.var.type, element=first.element,
                  causality=first.item.var.causality,
                  variability=first.item.var.variability),
-        first.item.var.name, part=part)
+        first.item.var.name, part=part, cause=_read_back_cause(first.item.var.name, problem,
+                                                               faults))
+
+
+def _read_back_cause(name: str, problem: str, faults: list[Fault]) -> tuple[str, ...]:
+    """A read-back finding's cause: the variable, and, for a refusal or an unwritten element,
+    each state and mode it shows in (the call that stops the FMU's run there fails too, and so
+    do the reads of other variables there)."""
+    keys = [causes.through(name)]
+    if problem != "nan":
+        keys += [causes.failing(f.state, f"{f.mode.upper()} mode") for f in faults]
+    return tuple(dict.fromkeys(keys))
 
 
 # ------------------------------------------------------------------------ input-not-settable
@@ -237,7 +249,8 @@ def input_not_settable(ctx: ProbeContext) -> Iterator[Violation]:
                     "FMI 3.0 allows setting it (SG-05)", var_location(ctx, vr),
                     evidence(error_evidence(exc), value_reference=vr, value=value,
                              mode=f"{mode.upper()} mode", state="Continuous-Time Mode",
-                             point=start.label), layout.name(vr))
+                             point=start.label), layout.name(vr),
+                    cause=causes.through(layout.name(vr)))
                 if getattr(inst, "failure", None) is not None:
                     inst = renew(ctx, mode)
 

@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 from typing import Any, Iterator
 
+from ...report import causes
 from ...report.findings import Location, Violation, evidence
 from ..instruments.api import FmiError, ProbeContext, ProbeSkipped
 from ..instruments.common import (close, error_evidence, layout_of, manifest_location, new_instance,
@@ -148,10 +149,19 @@ def _ode_handshake(ctx: ProbeContext, layout: Layout, library: Library, where: L
             f"with the enable parameter false the FMU does not run as an ordinary ODE FMU: "
             f"{exc.call} returned {exc.status}{at}", where,
             evidence(error_evidence(exc), sequence=steps.done, mode="ode",
-                     point=point.label if point else None), subject, part="ode-run-fails")
+                     point=point.label if point else None), subject, part="ode-run-fails",
+            cause=causes.failing(_STATE_AT.get(exc.call, "Continuous-Time Mode" if point
+                                               else "Initialization Mode"), "ODE mode"))
     finally:
         if inst is not None:
             inst.free()
+
+
+#: The state an instance is in when a call of the handshake's sequence fails: a run that stops
+#: there and the reads refused there are one defect (``causes.failing``).
+_STATE_AT = {"fmi3EnterInitializationMode": "Instantiated",
+             "fmi3ExitInitializationMode": "Initialization Mode",
+             "fmi3UpdateDiscreteStates": "Event Mode", "fmi3EnterContinuousTimeMode": "Event Mode"}
 
 
 # ---------------------------------------------------------------- dae-initialization-refused
@@ -180,7 +190,8 @@ def dae_initialization_refused(ctx: ProbeContext) -> Iterator[Violation]:
             f"alpha.1 allows this (DAE-14), {then}",
             manifest_location(ctx, layout.enable, ("Enable",)),
             evidence(error_evidence(exc), dae_mode_probed="runtime-switch" if switched
-                     else None), subject=exc.call)
+                     else None), subject=exc.call,
+            cause=causes.failing(_STATE_AT.get(exc.call, "Initialization Mode"), "DAE mode"))
     finally:
         inst.free()
 

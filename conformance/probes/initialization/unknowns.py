@@ -29,6 +29,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from ...report import causes
 from ...report.findings import Violation, evidence
 from ..instruments.api import ProbeContext, ProbeSkipped
 from ..instruments.entry_comparison import (entry_violations, kind_changes, mismatched_entries,
@@ -105,7 +106,8 @@ def _undeclared(s: InitialSurvey, *, rtol: float, margin: float, ulps: float,
             evidence(_where(s), entry=layout.entry(i, j), unknown=row.name, known=col.name,
                      known_value_reference=col.vr, known_role=col.role, **w.items,
                      point=point_evidence(layout, w.ps)),
-            subject=layout.entry(i, j), part="dae-mode" if s.mode == "dae" else None))
+            subject=layout.entry(i, j), part="dae-mode" if s.mode == "dae" else None,
+            cause=causes.entry(layout.rows[i].name, layout.cols[j].name)))
     yield from found
 
 
@@ -168,7 +170,8 @@ def _kind_violated(s: InitialSurvey, *, rtol: float, margin: float, ulps: float,
                      largest=c.hi[0], tolerance=c.tolerance,
                      confirmed=[lo[0], hi[0]], confirm_factor=confirm_factor,
                      points=[point_evidence(layout, c.lo[2]), point_evidence(layout, c.hi[2])]),
-            subject=layout.entry(i, j)))
+            subject=layout.entry(i, j),
+            cause=causes.entry(layout.rows[i].name, layout.cols[j].name)))
     yield from found
 
 

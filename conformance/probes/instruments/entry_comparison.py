@@ -19,6 +19,7 @@ from typing import Iterator, Mapping
 import numpy as np
 
 from ...report.catalogue import default_catalogue
+from ...report import causes
 from ...report.findings import Violation, evidence
 from ...numerics import measure
 from ...numerics.intsets import isin_ints
@@ -215,10 +216,10 @@ def _first_per_key(key: np.ndarray, value: np.ndarray, order: np.ndarray) -> np.
 def entry_violations(s: Survey, worst: dict, message: str, *, place: str
                      ) -> Iterator[Violation]:
     """One violation per entry the finite differences do not confirm. ``place`` says where it
-    was seen (the function, and the mode or state); the cause is the entry and its deviation,
-    the FMU's value less the finite difference (three significant digits): a wrong partial
-    derivative that the directional and the adjoint derivative, both modes or Initialization
-    Mode all give is one defect, one finding (``conformance.run.causes``)."""
+    was seen (the function, and the mode or state); the cause is the entry's unknown and its
+    known: a wrong partial derivative that the directional and the adjoint derivative, both
+    modes or Initialization Mode all give, and the entries a wrong formula spoils (of one
+    unknown, or through one known), are one defect, one finding (``conformance.run.causes``)."""
     layout = s.layout
     assert layout is not None
     for (i, j), w in sorted(worst.items()):
@@ -228,19 +229,7 @@ def entry_violations(s: Survey, worst: dict, message: str, *, place: str
             **w.items, scale="row scale S_i = sum_j |J_ij| * nominal_j; tolerance = margin * "
             "error_estimate + rtol * S_i / nominal_j", point=point_evidence(layout, w.ps),
             place=place),
-            subject=entry, cause=_deviation_cause(entry, w.items))
-
-
-def _deviation_cause(entry: str, items: dict) -> str | None:
-    """The defect an entry's mismatch names: the entry and the deviation of the FMU's value
-    from the finite difference, to three significant digits (None: no value to compare)."""
-    fmu, fd = items.get("fmu"), items.get("finite_difference")
-    if not isinstance(fmu, (int, float)) or not isinstance(fd, (int, float)):
-        return None
-    deviation = float(fmu) - float(fd)
-    if not np.isfinite(deviation):
-        return None
-    return f"derivative entry {entry}, deviation {deviation:.3g}"
+            subject=entry, cause=causes.entry(layout.rows[i].name, layout.cols[j].name))
 
 
 def entry_errors(worst: dict, layout: JacobianLayout) -> list[tuple[str, float, float]]:

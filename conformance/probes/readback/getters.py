@@ -24,6 +24,7 @@ from typing import Any, Iterator, Sequence
 
 import numpy as np
 
+from ...report import causes
 from ...report.findings import Violation, evidence
 from ...runtime.instance import Instance, PointNotSet
 from ...runtime.layout import Layout
@@ -104,7 +105,7 @@ def _vector_against(ctx: ProbeContext, layout: Layout, mode: str, point: Point, 
                      t=point.t, mode=_mode(mode), rtol=rtol, atol=atol,
                      tolerance=atol + rtol * max(layout.scale(vr), abs(x), abs(y)),
                      scale="nominal or magnitude of the variable"),
-            layout.name(vr), part=part)
+            layout.name(vr), part=part, cause=causes.through(layout.name(vr)))
 
 
 # ------------------------------------------------------------------- state-nominals-invalid

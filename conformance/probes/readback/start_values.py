@@ -12,6 +12,7 @@ from __future__ import annotations
 import math
 from typing import Any, Iterator
 
+from ...report import causes
 from ...report.findings import Violation, evidence
 from ..instruments.api import ProbeContext, ProbeSkipped
 from ..instruments.common import var_location
@@ -70,7 +71,7 @@ def start_value_not_applied(ctx: ProbeContext, *, rtol: float,
                      start=h.start[k], held=h.held[k], element=k if len(h.start) > 1 else None,
                      elements_differing=len(wrong), elements=len(h.start),
                      state="Instantiated (no fmi3Set* called)", rtol=tolerance),
-            subject=h.var.name)
+            subject=h.var.name, cause=causes.through(h.var.name))
 
 
 def _show(value: Any) -> str:

@@ -34,6 +34,7 @@ import dataclasses
 import logging
 from typing import Any, Iterator
 
+from ...report import causes
 from ...report.findings import Location, Violation, evidence
 from ...numerics import settings as st
 from ...numerics.compare import compare
@@ -232,7 +233,7 @@ def _mismatch(found: Any, worst: dict[str, Any], factor: float, dae: Trajectory,
                           "nominal_i", compared_times=found.compared_times,
                  left_out=found.left_out, dae_status=dae.status, ode_status=ode.status,
                  confirmation=tries),
-        subject=str(worst["variable"]), part=part)
+        subject=str(worst["variable"]), part=part, cause=causes.through(str(worst["variable"])))
 
 
 def _first(traj: Trajectory) -> Trajectory:

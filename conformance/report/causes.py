@@ -1,0 +1,28 @@
+"""The names of causes (``Violation.cause``): one spelling for every check that can see one.
+
+Two violations that name one key are one defect (``conformance.run.causes`` folds them):
+
+* :func:`through` -- a variable whose value or partial derivatives are wrong, or that the FMU
+  does not take or give: every derivative entry names its unknown and its known, so that what a
+  wrong formula or a wrong partial derivative spoils is one finding, and so does a variable the
+  FMU does not let an importer set or read;
+* :func:`failing` -- the FMU fails to evaluate in one state of one mode: the call that stops
+  its run, and the reads refused there, are one defect.
+"""
+from __future__ import annotations
+
+
+def through(name: str) -> str:
+    """The cause 'the values or partial derivatives through variable ``name``'."""
+    return f"through '{name}'"
+
+
+def entry(unknown: str, known: str) -> tuple[str, str]:
+    """The cause of a derivative entry d(unknown)/d(known): its unknown and its known."""
+    return through(unknown), through(known)
+
+
+def failing(state: str, mode: str) -> str:
+    """The cause 'the FMU fails to evaluate in ``state``, ``mode``' (e.g. 'Initialization
+    Mode', 'ODE mode')."""
+    return f"evaluation fails in {state}, {mode}"

@@ -12,7 +12,9 @@ spoils the entries of several unknowns, each sharing a known with the next.
 The folded finding is the weightiest of them; among equals the first cause (:data:`FIRST`,
 then code order -- the catalogue numbers rules in the order a check meets them, so a cause
 mostly comes before its consequences --, then where it was seen, so that one probe worker or two
-give the same finding). Its message says how many more places and the first few, its evidence
+give the same finding; a crash in a call of one variable before the same crash in a call of
+several, which it narrows to that variable). Its message says how many more places and the
+first few, its evidence
 lists each (``also``: rule, where, message). Violations without a cause are left alone.
 """
 from __future__ import annotations
@@ -91,8 +93,8 @@ def fold_indexed(items: Sequence[Item], severity: Callable[[RuleSpec, str | None
         if len(members) < 2:
             continue
         members.sort(key=lambda k: (-severity(items[k][0], items[k][1].part),
-                                    _rank(items[k][0]), items[k][0].code, seen(items[k][1]),
-                                    items[k][1].text))
+                                    _rank(items[k][0]), items[k][0].code, _breadth(items[k][1]),
+                                    seen(items[k][1]), items[k][1].text))
         first, rest = members[0], members[1:]
         rule, owner = items[first]
         also = [(items[k][0].code, (labels[k] if k < len(labels) else None)
@@ -113,6 +115,13 @@ def fold_indexed(items: Sequence[Item], severity: Callable[[RuleSpec, str | None
 
 def _rank(rule: RuleSpec) -> int:
     return FIRST.index(rule.name) if rule.name in FIRST else len(FIRST)
+
+
+def _breadth(v: Violation) -> int:
+    """How many variables the violation's call named (``value_reference_count``: a crash
+    during a call that read or set them); the narrowest names the defect best (0: none)."""
+    n = dict(v.evidence).get("value_reference_count")
+    return n if isinstance(n, int) else 0
 
 
 def seen(v: Violation) -> str:

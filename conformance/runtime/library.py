@@ -30,7 +30,7 @@ import shutil
 import time
 from typing import Any, Callable, Sequence
 
-from .callrecord import CallRecord
+from .callrecord import VALUE_CALLS, CallRecord
 from .errors import FmiError, Unavailable
 from .host import host_platform_tuple, library_extension
 from .layout import Layout
@@ -86,7 +86,12 @@ def _recording_class() -> Any:
                                       "did not return (binary-timed-out) or returned fmi3Fatal")
                 del self.lsdae_log[:]  # the log holds the messages of the last call only
                 before = self._lsdae_before()
-                self.lsdae_record.enter(fname, self.lsdae_calls + 1)
+                if fname in VALUE_CALLS and len(args) > 2:
+                    n = args[2]
+                    self.lsdae_record.enter(fname, self.lsdae_calls + 1, args[1],
+                                            int(getattr(n, "value", n)))
+                else:
+                    self.lsdae_record.enter(fname, self.lsdae_calls + 1)
                 started = time.perf_counter()
                 result = function(*args)
                 self.lsdae_seconds += time.perf_counter() - started

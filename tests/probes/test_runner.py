@@ -20,6 +20,7 @@ from conformance.probes.machinery.registry import PROBES
 from conformance.probes.instruments.sampling import near_points, start_point
 from conformance.runtime.callrecord import CallRecord
 from conformance.runtime.layout import Layout
+from tests.checkkit import checked
 from tests.fixtures import FORMULATION_MANIFEST, build_scene, variant
 
 CATALOGUE = default_catalogue()
@@ -258,6 +259,27 @@ def test_crash_is_a_finding_and_the_next_fmu_is_checked():
     assert CATALOGUE["nan-or-inf"].code in second.rules_run
 
 
+def test_a_crash_in_a_getter_of_several_variables_is_narrowed_to_the_one_that_crashes():
+    """DEFECT_SEGFAULT_GETFLOAT64 crashes reading a residual in Continuous-Time Mode; the probes
+    read the residuals with other variables. One finding (issue 29): a worker of its own reads
+    each variable of the crashing call alone, and its crash names the first residual, the
+    probes' crashes listed as the same defect."""
+    report = checked(build_scene("HelloWorldDAE", defines=["DEFECT_SEGFAULT_GETFLOAT64"]),
+                     options=EngineOptions(probes=True))
+    (crash,) = [f for f in report.findings if f.name == "binary-crashed"]
+    ev = crash.evidence_dict()
+    assert (ev["variables"], ev["value_references"], ev["value_reference_count"]) == (
+        ("g1",), (6,), 1)
+    assert crash.message.startswith(
+        "the binary crashed (killed by SIGSEGV) during fmi3GetFloat64 of 'g1' (valueReference "
+        "6), in lsdae's narrowing of the crash (each variable of the call read alone, "
+        "Continuous-Time Mode, DAE mode); the same defect in ")
+    also = thaw(ev["also"])
+    assert also and {a["rule"] for a in also} == {crash.code}
+    assert all("during fmi3GetFloat64 of " in a["message"] and "'g1'" in a["message"]
+               and "variables (" in a["message"] for a in also)
+
+
 def test_findings_of_probes_before_a_crash_are_kept():
     # enable-handshake (first) fails on the ODE derivatives; the crash comes later
     fmu = build_scene("HelloWorldDAE", defines=["DEFECT_ODE_DERIVATIVES_FAIL",
@@ -361,4 +383,25 @@ def test_call_record_round_trip():
     record.leave()
     assert CallRecord.parse(record.buffer)[2] is False
     assert CallRecord.parse(b"") == ("", "", False)
+
+
+def test_call_record_keeps_the_value_references_of_the_call_in_progress():
+    """A getter's or setter's value references (the count, the first REFS_KEPT of an array),
+    none for a call without them or a raw pointer the record does not read."""
+    import ctypes
+    from conformance.runtime.callrecord import REFS_KEPT
+    record = CallRecord()
+    refs = (ctypes.c_uint * 3)(5, 4294967295, 7)
+    record.enter("fmi3GetFloat64", 1, refs, 3)
+    assert CallRecord.refs(record.buffer) == (3, (5, 4294967295, 7))
+    record.enter("fmi3GetFloat64", 2, refs, 1)
+    assert CallRecord.refs(record.buffer) == (1, (5,))
+    many = (ctypes.c_uint * (REFS_KEPT + 4))(*range(REFS_KEPT + 4))
+    record.enter("fmi3SetFloat64", 3, many, REFS_KEPT + 4)
+    assert CallRecord.refs(record.buffer) == (REFS_KEPT + 4, tuple(range(REFS_KEPT)))
+    record.enter("fmi3GetFloat64", 4, ctypes.cast(refs, ctypes.POINTER(ctypes.c_uint)), 3)
+    assert CallRecord.refs(record.buffer) == (0, ())
+    record.enter("fmi3EnterEventMode", 5)
+    assert CallRecord.refs(record.buffer) == (0, ())
+    assert CallRecord.refs(b"") == (0, ())
 

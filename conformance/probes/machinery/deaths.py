@@ -27,8 +27,9 @@ import os
 import time
 from typing import Any
 
+from ...report import causes
 from ...report.findings import Location, Violation, evidence
-from ...runtime.callrecord import CallCounts, CallRecord
+from ...runtime.callrecord import GETTER_CALLS, CallCounts, CallRecord
 from ...runtime.supervisor import WorkerProcess
 from .registry import ENDURANCE as COUNTED
 
@@ -105,6 +106,48 @@ class Diagnosis:
                 return CallRecord.parse(fh.read(CallRecord.SIZE))
         except OSError:
             return "", "", False
+
+    def _refs(self) -> tuple[int, tuple[int, ...]]:
+        """(how many value references the last call passed, the first of them)."""
+        try:
+            with open(self.driver.call_file, "rb") as fh:
+                return CallRecord.refs(fh.read(CallRecord.SIZE))
+        except OSError:
+            return 0, ()
+
+    def _variables(self) -> tuple[str, dict[str, Any], tuple[str, ...]]:
+        """The variables the call in progress read or set, as the message names them (' of
+        'time' (valueReference 4294967295)'), as evidence, and as causes (one variable: the
+        crash is that variable's, and the same crash in a call that read it with others is
+        the same defect)."""
+        n, refs = self._refs()
+        if not n:
+            return "", {}, ()
+        model = getattr(self.run.ctx, "model", None)
+        by_vr = model.by_vr if model is not None else {}
+        names = [by_vr[vr].name if vr in by_vr and by_vr[vr].name else f"valueReference {vr}"
+                 for vr in refs]
+        if n == 1:
+            text = (f" of '{names[0]}' (valueReference {refs[0]})" if refs[0] in by_vr
+                    else f" of {names[0]}")
+        else:
+            shown = ", ".join(f"'{name}'" for name in names) + (", …" if n > len(names) else "")
+            text = f" of {n} variables ({shown})"
+        return (text, {"value_references": list(refs), "variables": names,
+                       "value_reference_count": n},
+                (causes.through(names[0]),) if n == 1 else ())
+
+    def _to_narrow(self, call: str, how: str) -> None:
+        """Note a crash during a getter of several variables, all of them kept in the record,
+        for the driver to narrow to one (:mod:`.narrowing`); a getter's crash that names one
+        variable needs no narrowing."""
+        n, refs = self._refs()
+        if call not in GETTER_CALLS:
+            return
+        if n == 1:
+            self.driver.narrowed.add(call)
+        elif n == len(refs):
+            self.driver.to_narrow.setdefault((call, how), refs)
 
     def _growth(self) -> tuple[int, str]:
         """(bytes by which FMI calls grew the worker's address space, the call last)."""
@@ -242,12 +285,17 @@ class Diagnosis:
         else:
             illegal = facts["call_in_progress"] and call in ILLEGAL_CALLS.get(probe, ())
             # the same crash (the call in progress, the same way of dying) reached by several
-            # probes is one defect: one finding, the probes listed in its evidence
-            same = f"the binary crashed ({how}) during {call}" \
-                if call and facts["call_in_progress"] else None
+            # probes is one defect: one finding, the probes listed in its evidence; a call of
+            # one variable names it, and joins the crashes of calls that read it with others
+            same: tuple[str, ...] = ()
+            of, refs, keys = "", {}, ()
+            if call and facts["call_in_progress"]:
+                of, refs, keys = self._variables()
+                same = (f"the binary crashed ({how}) during {call}", *keys)
+                self._to_narrow(call, how)
             self.run.emit(CRASHED, Violation(
-                f"the binary crashed ({how}) {where}, in {self.run.names(probe)}",
-                Location(file=self.run.binary),
-                ev + evidence(place=self.run.names(probe)), subject=call or probe,
-                part="crash-on-illegal-call" if illegal else None, cause=same))
+                f"the binary crashed ({how}) {where.replace(f'during {call}', f'during {call}{of}', 1)}"
+                f", in {self.run.names(probe)}", Location(file=self.run.binary),
+                ev + evidence(refs, place=self.run.names(probe)), subject=call or probe,
+                part="crash-on-illegal-call" if illegal else None, cause=same or None))
         return probe, ""

@@ -34,7 +34,7 @@ from ...runtime.callrecord import CallRecord
 from ...runtime.protocol import Job, violation_from_json
 from ...runtime.supervisor import WorkerProcess
 from .deaths import CRASHED, MEMORY, NOT_LOADABLE, TIMED_OUT, CallClock, Diagnosis
-from .job import ENTRY, ProbeJob
+from .job import ENTRY, NARROW, ProbeJob
 
 RUNNER_RULES = (CRASHED, TIMED_OUT, MEMORY, NOT_LOADABLE)
 # The folder that holds conformance/ (one parent per dot of this module's name).
@@ -55,10 +55,12 @@ class Driver:
 
     def __init__(self, run: Any, tmp: str, probes: list[RuleSpec], *,
                  others: list[RuleSpec] | None = None, blocked: list[str] | None = None,
-                 lane: int = 0):
+                 lane: int = 0, narrowed: set[str] | None = None):
         """``others``: the probes the other lane's workers run (:mod:`.lanes`), which this
         lane's workers are told are planned; ``blocked``: the list of FMI functions not to be
-        called again, shared by the lanes; ``lane``: this lane's number, in the steps' stats."""
+        called again, shared by the lanes; ``lane``: this lane's number, in the steps' stats;
+        ``narrowed``: the getters whose crash names one variable, shared by the lanes (one
+        narrowing is enough)."""
         self.run, self.tmp, self.remaining = run, tmp, probes
         self.others, self.lane = list(others or ()), lane
         self.limits = run.limits
@@ -70,6 +72,10 @@ class Driver:
         self.died: list[str] = []      # probes during which a worker died or was killed
         self.diagnosis = Diagnosis(self)
         self.stopped = False           # stop(): the check was interrupted
+        # crashes during a getter of several variables, to narrow to one ((call, how): value
+        # references), and the getters whose crash already names one variable
+        self.to_narrow: dict[tuple[str, str], tuple[int, ...]] = {}
+        self.narrowed: set[str] = set() if narrowed is None else narrowed
         self._watch: WorkerProcess | None = None
 
     def stop(self) -> None:
@@ -79,6 +85,19 @@ class Driver:
             self._watch.signal_kill()
 
     def drive(self) -> None:
+        self._drive()
+        self._narrow()
+
+    def _narrow(self) -> None:
+        """One more worker for each crash during a getter of several variables: each of them
+        read alone (:mod:`.narrowing`); a crash there is diagnosed as any other, and names the
+        variable. Not when the check was stopped, or the per-FMU time is up."""
+        for (call, _how), refs in list(self.to_narrow.items()):
+            if self.stopped or time.monotonic() >= self.fmu_deadline or call in self.narrowed:
+                return
+            self._one_worker([(NARROW, NARROW, {"call": call, "refs": list(refs)})])
+
+    def _drive(self) -> None:
         restarts, own = 0, 0
         while True:
             result = self._one_worker()
@@ -118,12 +137,16 @@ class Driver:
 
     # -- one worker process --------------------------------------------------------------
 
-    def _start(self) -> subprocess.Popen[bytes]:
+    def _start(self, pseudo: list[tuple[str, str, dict[str, Any]]] | None = None
+               ) -> subprocess.Popen[bytes]:
+        """A worker for the remaining probes, or for ``pseudo`` (lsdae's own steps, such as
+        :data:`.narrowing.NARROW`)."""
         ctx = self.run.ctx
         payload = ProbeJob(model=ctx.model, manifest=ctx.manifest, draft=ctx.draft,
                            seed=self.run.seed, endurance=self.run.endurance,
                            died=list(self.died),
-                           probes=[(r.code, r.name, r.option_values) for r in self.remaining],
+                           probes=pseudo if pseudo is not None else
+                           [(r.code, r.name, r.option_values) for r in self.remaining],
                            planned=[(r.code, r.name, r.option_values)
                                     for r in self.remaining + self.others] if self.others else [])
         job = Job(directory=os.path.join(self.tmp, "fmu"), call_file=self.call_file,
@@ -146,8 +169,9 @@ class Driver:
                 stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=err, cwd=self.tmp,
                 env=env, start_new_session=True)
 
-    def _one_worker(self) -> _Death:
-        proc = self._start()
+    def _one_worker(self, pseudo: list[tuple[str, str, dict[str, Any]]] | None = None
+                    ) -> _Death:
+        proc = self._start(pseudo)
         watch = self._watch = WorkerProcess(proc)
         if self.stopped:   # stop() came while this worker started
             watch.signal_kill()
@@ -234,6 +258,8 @@ class Driver:
 
     def _done(self, event: dict[str, Any]) -> None:
         code = str(event.get("code"))
+        if code == NARROW:   # lsdae's own step: no rule ran
+            return
         outcome = self.run.outcome
         violations = [violation_from_json(v) for v in event.get("violations") or []]
         if event.get("replaces"):   # what "partial" sent is superseded by this event

@@ -11,6 +11,10 @@ from typing import Any
 
 ENTRY = "conformance.probes.machinery.stage:run_job"
 
+#: lsdae's own step that narrows a crash to one variable (:mod:`.narrowing`): its code in the
+#: job and, with the mode after a blank, in the call record.
+NARROW = "narrow"
+
 
 @dataclass
 class ProbeJob:

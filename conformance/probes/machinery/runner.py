@@ -51,6 +51,7 @@ from ...report.findings import Violation, evidence
 from ...model.layer import describe_fmu
 from ...runtime.host import host_platform_tuple, library_extension
 from .driver import RUNNER_RULES, Driver
+from .job import NARROW
 from .lanes import Lanes, split, workers_for
 from .registry import ENDURANCE, FAMILY_OF, FIRST, FIRST_CAUSE, LAST
 
@@ -138,6 +139,10 @@ class _Run:
             return "setup (loading the binary, entering Continuous-Time Mode)"
         if code == "teardown":
             return "teardown (fmi3Terminate, fmi3FreeInstance)"
+        if code.startswith(NARROW):
+            mode = code.split()[-1].upper() if " " in code else ""
+            return ("lsdae's narrowing of the crash (each variable of the call read alone, "
+                    f"Continuous-Time Mode{', ' + mode + ' mode' if mode else ''})")
         rule = next((r for r in self.rules if r.code == code), None)
         return f"probe {code} {rule.name}" if rule else f"probe {code or '?'}"
 
@@ -204,6 +209,7 @@ class _Run:
             Driver(self, tmp, probes).drive()
             return
         blocked: list[str] = []    # an FMI function one lane must not call, neither may the other
+        narrowed: set[str] = set()  # a getter whose crash one lane named a variable of
         runs, drivers = [], []
         for number, lane in enumerate(lanes):
             run = copy.copy(self)
@@ -215,7 +221,7 @@ class _Run:
             others = [p for other in lanes if other is not lane for p in other]
             runs.append(run)
             drivers.append(Driver(run, folder, lane, others=others, blocked=blocked,
-                                  lane=number))
+                                  lane=number, narrowed=narrowed))
         log.debug("%d probe workers at once: %s", len(lanes),
                   " | ".join(" ".join(r.code for r in lane) for lane in lanes))
         Lanes(drivers).drive()

@@ -57,6 +57,8 @@ from ..instruments.independence import FIRST, survey
 from ..instruments.jacobian_layout import MODE_NAMES
 from .deaths import not_loadable
 from .job import ProbeJob
+from .job import NARROW
+from .narrowing import narrow
 from .registry import FIRST_CAUSE, PROBES
 from ..instruments.sampling import near_points, points_info, start_point
 
@@ -161,7 +163,9 @@ class _Stage:
         violations: list[Any] = []
         skipped = None
         try:
-            for v in PROBES[code](ctx, **options):
+            probe = PROBES[code] if code != NARROW else (
+                lambda ctx, **o: narrow(ctx, record, **o))
+            for v in probe(ctx, **options):
                 violations.append(v)
         except ProbeSkipped as exc:
             skipped = str(exc) or "skipped by the probe"

@@ -23,6 +23,7 @@ __all__ = ["Dependency", "DiscreteStates", "Instance", "KnownNotSet", "PointNotS
 DEPENDENCY_KINDS = ("independent", "constant", "fixed", "tunable", "discrete", "dependent")
 _KIND_NAMES = dict(enumerate(DEPENDENCY_KINDS))   # fmi3DependencyKind -> its name
 MAX_DEPENDENCIES = 10_000_000   # a larger count from the FMU is garbage, not an allocation
+MAX_START_UPDATES = 10          # fmi3UpdateDiscreteStates calls after initialisation
 
 
 class Instance:
@@ -33,6 +34,7 @@ class Instance:
     ``discrete`` is what the event update after initialisation said (nextEventTime...).
     ``failure`` is the first call that returned fmi3Error or fmi3Fatal (SM-04: the instance is
     in Terminated since; a later failing call carries it as ``after``), cleared by fmi3Reset.
+    ``configuring``: in Configuration or Reconfiguration Mode (entered, not yet exited).
     """
 
     def __init__(self, library: Library, *, name: str):
@@ -48,6 +50,7 @@ class Instance:
         self.failure: FmiError | None = None
         self.initialised = False
         self.initializing = False    # in Initialization Mode, where fmi3Terminate is not allowed
+        self.configuring = False     # in (Re)Configuration Mode: only Set and Exit are allowed
         self.discrete: DiscreteStates | None = None   # the update that ended initialisation
         self._callback = fmi3LogMessageCallback(library.logger(name))  # kept alive here
         self._fmu = library.fmu_for_instance()   # the library's, or a copy of its own (alone)
@@ -75,9 +78,11 @@ class Instance:
 
     def enter_configuration_mode(self) -> None:
         self._fmi("fmi3EnterConfigurationMode")
+        self.configuring = True
 
     def exit_configuration_mode(self) -> None:
         self._fmi("fmi3ExitConfigurationMode")
+        self.configuring = False
 
     def enter_initialization_mode(self, start_time: float) -> None:
         self._fmi("fmi3EnterInitializationMode", False, 0.0, start_time, False, 0.0)
@@ -90,12 +95,19 @@ class Instance:
 
     def update_discrete_states(self) -> DiscreteStates:
         """fmi3UpdateDiscreteStates until no further update is needed or the FMU asks to
-        terminate (at most 10 times); what the last call said, with the number of calls."""
-        for calls in range(1, 11):
+        terminate (at most ``MAX_START_UPDATES`` times); what the last call said, with the
+        number of calls. An iteration that has not settled by then is :class:`Unavailable`
+        (what needs the instance in Continuous-Time Mode is skipped with this reason): FMI 3.0.2
+        §2.3.5, while discreteStatesNeedUpdate is true the importer "must stay in EventMode",
+        so fmi3EnterContinuousTimeMode may not follow."""
+        for calls in range(1, MAX_START_UPDATES + 1):
             update = self.update_discrete_states_once()
             if not update.needs_update or update.terminate:
-                break
-        return update._replace(calls=calls)
+                return update._replace(calls=calls)
+        raise Unavailable("the event iteration after initialisation does not settle: "
+                          "fmi3UpdateDiscreteStates still says discreteStatesNeedUpdate after "
+                          f"{MAX_START_UPDATES} calls, and Continuous-Time Mode may not be "
+                          "entered before it says false")
 
     def update_discrete_states_once(self) -> DiscreteStates:
         """One fmi3UpdateDiscreteStates: its flags and nextEventTime (None when not defined)."""
@@ -125,11 +137,13 @@ class Instance:
         self._fmi("fmi3Reset")
         self.failure = None
         self.initialised = False
+        self.configuring = False
         self.mode = "ode"
 
     def free(self) -> None:
-        """Terminate (if initialised, and not still in Initialization Mode, where FMI 3.0 does not
-        list fmi3Terminate) and free the instance; errors here are ignored."""
+        """Leave (Re)Configuration Mode, terminate (if initialised, and not still in
+        Initialization Mode, where FMI 3.0 does not list fmi3Terminate) and free the instance;
+        errors here are ignored. An instance a call put in Terminated is only freed."""
         if not self.component:
             return
         if self.library.fatal:  # after fmi3Fatal no function may be called at all (SM-04)
@@ -138,7 +152,18 @@ class Instance:
                 self.library.instances.remove(self)
             return
         try:
-            if self.initialised and not self.initializing:
+            if self.configuring and self.failure is None:
+                # FMI 3.0.2 §2.3.6, §2.3.7: (Re)Configuration Mode allows only fmi3Set* and
+                # fmi3ExitConfigurationMode, and lies outside the super state fmi3FreeInstance
+                # leaves: back to Instantiated or Event Mode first (still there if refused)
+                self.exit_configuration_mode()
+        except FmiError:
+            pass
+        try:
+            # FMI 3.0.2 §2.3.8: fmi3Terminate is not allowed in Terminated, where an fmi3Error
+            # (or fmi3Fatal) put the instance (§2.3.1); nor in Reconfiguration Mode (§2.3.7)
+            if (self.initialised and not self.initializing and not self.configuring
+                    and self.failure is None):
                 self._fmi("fmi3Terminate")
         except FmiError:
             pass

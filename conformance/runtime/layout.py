@@ -159,7 +159,11 @@ def _start_time(model: ModelDescription) -> float:
 
 
 def _enable(model: ModelDescription, manifest: Manifest | None) -> tuple[int | None, str, bool]:
-    """(value reference, status, tunable) of the enable parameter, if it can be used."""
+    """(value reference, status, tunable) of the enable parameter, if it can be used: a scalar
+    Boolean structural parameter, fixed or tunable. Any other switch cannot be set at all: FMI
+    3.0.2 §2.3.6 allows fmi3Set in Configuration Mode only on such a variable (and §2.3.2
+    fmi3EnterConfigurationMode only on an FMU that has one); the static rules report why
+    (enable-parameter-not-boolean, -not-structural, -variability, -not-scalar)."""
     if manifest is None:
         return None, "no-layer", False
     if not manifest.enables:
@@ -168,6 +172,8 @@ def _enable(model: ModelDescription, manifest: Manifest | None) -> tuple[int | N
     var = model.by_vr.get(ref.vr) if ref.vr is not None else None
     if var is None and ref.name:
         var = next((v for v in model.variables if v.name == ref.name), None)
-    if var is None or var.vr is None or var.type != "Boolean" or var.dimensions:
+    if (var is None or var.vr is None or var.type != "Boolean" or var.dimensions
+            or var.causality != "structuralParameter"
+            or var.variability not in ("fixed", "tunable")):
         return None, "unusable", False
     return var.vr, "ok", var.variability == "tunable"

@@ -35,7 +35,9 @@ def simulate_instance(inst: Instance, layout: Layout, settings: Settings, *, sta
         y0 = inst.get_float64([*system.states, *system.algebraic])
         traj = integrate_dae(system, settings, t0=start, y0=y0, stop=stop,
                              start_update=inst.discrete)
-        if not traj.has_events:  # after events the discrete state no longer fits early times
+        # after events the discrete state no longer fits early times; after an fmi3Error the
+        # instance is in Terminated, where nothing may be set (FMI 3.0.2 §2.3.8)
+        if not traj.has_events and inst.failure is None:
             traj.residual_along = residual_along(inst, layout, traj)
         return traj
     ode = choose_jacobian(FmuOde(inst, layout, model, dense_up_to=settings.dense_up_to), start,

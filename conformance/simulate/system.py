@@ -249,6 +249,7 @@ class FmuOde(_Events):
         self.indicator_names = [layout.name(vr) for vr in layout.ode_event_indicators]
         self._set_at: tuple[float, bytes] | None = None
         self._algebraic_readable = True
+        self._event_mode = False   # entered Event Mode and not left it (terminateSimulation)
 
     @property
     def fmi_calls(self) -> int:
@@ -282,12 +283,24 @@ class FmuOde(_Events):
             self._set_at = None
             raise _failed(exc) from None
 
+    def enter_event_mode(self, t: float, y: np.ndarray) -> None:
+        super().enter_event_mode(t, y)
+        self._event_mode = True
+
+    def enter_continuous_time_mode(self) -> None:
+        super().enter_continuous_time_mode()
+        self._event_mode = False
+
     def algebraic_values(self, t: float, x: np.ndarray) -> np.ndarray:
-        """The algebraic variables the FMU computes in ODE mode (NaN if not readable)."""
+        """The algebraic variables the FMU computes in ODE mode (NaN if not readable). In Event
+        Mode (a run the FMU ended with terminateSimulation, recording its last output at the
+        event) they are read at the event's (t, x) without setting them: FMI 3.0.2 §2.3.5
+        allows neither fmi3SetTime nor fmi3SetContinuousStates there."""
         if not self.algebraic or not self._algebraic_readable:
             return np.full(len(self.algebraic), np.nan)
         try:
-            self._set(t, x)
+            if not self._event_mode:
+                self._set(t, x)
             return self.inst.get_float64(self.algebraic)
         except FmiError:
             self._set_at = None

@@ -194,6 +194,22 @@ def test_layout_knows_the_knowns_of_initialization_mode():
     assert layout.dd_columns.tolist() == [True, True, True, True]   # der(x) lists time
 
 
+def test_a_clocked_variable_is_no_known_set_as_a_start_value():
+    # FMI 3.0.2 §2.2.7.2: a clocked variable is set only in Event Mode while its clock ticks,
+    # or in Initialization Mode; the start values are set in Instantiated
+    clocked = ('<Clock name="tick" valueReference="10" causality="input" '
+               'intervalVariability="triggered"/>\n'
+               '    <Float64 name="cu" valueReference="11" causality="input" '
+               'variability="discrete" start="1" clocks="10"/>\n'
+               '    <Float64 name="cx" valueReference="12" causality="local" '
+               'variability="discrete" initial="exact" start="2" clocks="10"/>\n'
+               '  </ModelVariables>')
+    ctx = make_ctx(md_edits=[("</ModelVariables>", clocked)])
+    layout, start, _ = build_initial_layout(ctx, ctx.facts["layout"], "dae")
+    assert [c.name for c in layout.cols] == ["p", "x", "u", "time"]
+    assert start == {1: 2.0, 2: 0.5, 6: 0.3}
+
+
 def test_the_survey_is_shared_seeded_and_within_bounds():
     ctx = make_ctx(seed=3)
     first = initial_survey(ctx)

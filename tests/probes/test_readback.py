@@ -221,6 +221,16 @@ def test_which_variables_are_readable_in_which_state():
         assert not {"blob", "tick", "ticks"} & set(names)
 
 
+def test_the_independent_variable_is_not_read_in_instantiated_even_with_a_start():
+    text = (SCENES_DIR / "corpus" / "TypesAndArrays" / "modelDescription.xml").read_text(
+        encoding="utf-8").replace('causality="independent" variability="continuous"/>',
+                                  'causality="independent" variability="continuous" start="0"/>')
+    model = read_model_description(etree.ElementTree(etree.fromstring(text.encode())))
+    assert model.by_vr[0].start == "0"
+    assert "time" not in {i.var.name for i in readable(model, "Instantiated")}
+    assert "time" in {i.var.name for i in readable(model, "Initialization Mode")}
+
+
 @pytest.mark.parametrize("type_,attributes", [
     ("Int32", 'variability="discrete"'), ("Boolean", 'variability="discrete"'),
     ("Float64", ""), ("UInt8", 'causality="parameter" variability="fixed" start="3"'),

@@ -14,7 +14,8 @@ import pytest
 from lxml import etree
 
 from conformance.model.description import read_model_description
-from conformance.probes.instruments.instantiation import expected_starts
+from conformance.probes.instruments.instantiation import Held, expected_starts, read_held
+from conformance.runtime.errors import FmiError
 from conformance.probes.readback.start_values import differs
 from conformance.report.findings import Severity
 from conformance.run.engine import EngineOptions, check_fmu
@@ -56,7 +57,7 @@ def test_several_edits_give_one_finding_per_variable():
 MD = """<fmiModelDescription fmiVersion="3.0" modelName="M" instantiationToken="t">
 <ModelExchange modelIdentifier="M"/>
 <ModelVariables>
-  <Float64 name="time" valueReference="0" causality="independent"/>
+  <Float64 name="time" valueReference="0" causality="independent" initial="exact" start="0"/>
   <UInt64 name="n" valueReference="1" causality="structuralParameter" variability="fixed" start="3"/>
   <Float64 name="a" valueReference="2" causality="parameter" variability="fixed" start="0.5"><Dimension valueReference="1"/></Float64>
   <Float64 name="b" valueReference="3" causality="parameter" variability="fixed" start="1 2"><Dimension start="2"/></Float64>
@@ -66,6 +67,9 @@ MD = """<fmiModelDescription fmiVersion="3.0" modelName="M" instantiationToken="
   <Boolean name="f" valueReference="7" causality="parameter" variability="fixed" start="1"/>
   <Int32 name="g" valueReference="8" causality="parameter" variability="fixed" start="x"/>
   <String name="h" valueReference="9" causality="parameter" variability="fixed"><Start value="a b"/></String>
+  <Clock name="tick" valueReference="10" causality="input" intervalVariability="triggered"/>
+  <Int32 name="i" valueReference="11" causality="input" variability="discrete" start="4" clocks="10"/>
+  <Float64 name="j" valueReference="12" variability="discrete" initial="exact" start="5" clocks="10"/>
 </ModelVariables>
 <ModelStructure><Output valueReference="5"/></ModelStructure>
 </fmiModelDescription>"""
@@ -75,7 +79,8 @@ def test_what_the_xml_says_each_variable_must_hold():
     model = read_model_description(etree.ElementTree(etree.fromstring(MD.encode())))
     got = {v.name: expected_starts(model, v) for v in model.variables}
     assert got == {
-        "time": None,                 # independent: no start
+        "time": None,                 # independent: no value before initialisation (even
+                                      # with a start the XML should not give it)
         "n": [3],
         "a": [0.5, 0.5, 0.5],         # one value broadcast to the size the parameter gives
         "b": [1.0, 2.0],
@@ -85,7 +90,49 @@ def test_what_the_xml_says_each_variable_must_hold():
         "f": [True],
         "g": None,                    # not a number: the schema stage reports it
         "h": ["a b"],                 # one <Start> child, spaces and all
+        "tick": None,                 # no getter for a Clock
+        "i": None,                    # clocked: read only in Event Mode while the clock
+        "j": None,                    # ticks, or in Initialization Mode (FMI 3.0.2 §2.2.7.2)
     }
+
+
+class _RefusesFirst:
+    """An instance whose first fmi3Get<type> returns ``status``; ``calls``: the types read."""
+
+    def __init__(self, status: str):
+        self.status, self.calls = status, []
+
+    def get_typed(self, type_, vrs, n, *, fill=None):
+        self.calls.append(type_)
+        if len(self.calls) == 1:
+            raise FmiError(f"fmi3Get{type_}", self.status, ["refused"])
+        return [0] * n
+
+
+def _items() -> list[Held]:
+    model = read_model_description(etree.ElementTree(etree.fromstring(MD.encode())))
+    return [Held(v, start) for v in model.variables
+            if (start := expected_starts(model, v)) is not None]
+
+
+def test_nothing_is_read_on_an_instance_an_error_terminated():
+    # FMI 3.0.2 §2.3.8: values of an instance in Terminated serve debugging only
+    items, inst = _items(), _RefusesFirst("fmi3Error")
+    read_held(inst, items)
+    assert inst.calls == ["Float64"]                  # the array a, read first, refused
+    first = items[[h.var.name for h in items].index("a")].error
+    assert first is not None and first.after is None
+    assert all(h.held is None for h in items)
+    others = [h.error for h in items if h.var.name != "a"]
+    assert others and all(e is not None and e.after is first and e.status == "not called"
+                          for e in others)
+
+
+def test_a_discarded_read_does_not_stop_the_others():
+    items, inst = _items(), _RefusesFirst("fmi3Discard")
+    read_held(inst, items)
+    assert len(inst.calls) == 5                       # a, b, then n, f and h by type
+    assert [h.var.name for h in items if h.held is None] == ["a"]
 
 
 @pytest.mark.parametrize("type_, held, start, expected", [

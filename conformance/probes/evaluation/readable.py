@@ -27,6 +27,7 @@ from dataclasses import dataclass, field
 from typing import Any, Callable, Sequence
 
 from ...model.description import ModelDescription, Variable
+from ...runtime.errors import Unavailable
 from ...runtime.instance import Instance
 from ...runtime.modes import configure
 from ...runtime.records import GETTERS
@@ -76,8 +77,8 @@ def readable(model: ModelDescription, state: str) -> list[Item]:
     for var in model.variables:
         if var.vr is None or var.type not in GETTERS or var.clocks:
             continue
-        if state == "Instantiated" and var.start is None:
-            continue
+        if state == "Instantiated" and (var.start is None or var.causality == "independent"):
+            continue   # no start to read; time has none before fmi3EnterInitializationMode
         size = element_count(model, var)
         if size and (var.type != "String" or size == 1):
             items.append(Item(var, var.vr, size))
@@ -144,9 +145,10 @@ class _Walker:
             else:
                 inst.update_discrete_states()
                 inst.enter_continuous_time_mode()
-        except FmiError as exc:
+        except (FmiError, Unavailable) as exc:   # Unavailable: an event iteration unsettled
             for state in STATES[k:]:
-                self.result.unreached[state] = exc.describe()
+                self.result.unreached[state] = (exc.describe() if isinstance(exc, FmiError)
+                                                else str(exc))
             inst.free()
             return False
         return True

@@ -47,8 +47,10 @@ def _scalar_float64(model: ModelDescription, vr: int | None) -> Variable | None:
 
 
 def _role(var: Variable, states: set[int]) -> str | None:
-    """The known's role in Initialization Mode, or None if it is no known that can be set."""
-    if var.variability == "constant" or var.causality in ("independent", "structuralParameter"):
+    """The known's role in Initialization Mode, or None if it is no known that can be set as
+    a start value (in Instantiated, where a clocked variable cannot be set: FMI 3.0.2 §2.2.7.2)."""
+    if (var.variability == "constant" or var.causality in ("independent", "structuralParameter")
+            or var.clocks):
         return None
     if var.causality == "input":
         return "input"

@@ -93,9 +93,12 @@ def _parse(type_: str, token: str) -> Any:
 
 def expected_starts(model: ModelDescription, var: Variable) -> list[Any] | None:
     """The values ``var`` must hold after instantiation, one per element, or None when it has
-    none to hold or the XML does not say them clearly (a static finding's business)."""
+    none to hold or the XML does not say them clearly (a static finding's business).
+    Neither a clocked variable (FMI 3.0.2 §2.2.7.2: read only in Event Mode while its clock
+    ticks, or in Initialization Mode) nor the independent variable, even with a start, is read
+    in Instantiated."""
     if (var.vr is None or var.start is None or var.initial not in ("exact", "approx")
-            or var.type not in GETTERS):
+            or var.type not in GETTERS or var.clocks or var.causality == "independent"):
         return None
     size = element_count(model, var)
     if not size:
@@ -147,26 +150,44 @@ def _take(ctx: ProbeContext) -> Instantiated:
 def read_held(inst: Any, items: list[Held]) -> None:
     """Scalars of one type in one call, each array in a call of its own. A refused call
     leaves its variables unread (``error``): FMI 3.0 allows fmi3Get* in Instantiated (SG-01),
-    but a refusal is not a value the instance holds, so nothing is compared for them."""
+    but a refusal is not a value the instance holds, so nothing is compared for them. After
+    an fmi3Error (or fmi3Fatal) the instance is in Terminated, whose values serve debugging
+    only (FMI 3.0.2 §2.3.8): the calls not made yet are not made, their variables unread with
+    an error that follows the refusal (``after``), as the consequence it is (SM-04)."""
     scalars: dict[str, list[Held]] = {}
+    calls: list[tuple[str, list[Held]]] = []
     for h in items:
         if len(h.start) == 1 and not h.var.dimensions:
             scalars.setdefault(h.var.type, []).append(h)
         else:
-            _get(inst, h.var.type, [h])
-    for type_, group in scalars.items():
-        _get(inst, type_, group)
+            calls.append((h.var.type, [h]))
+    failed: FmiError | None = None
+    for type_, group in [*calls, *scalars.items()]:
+        if failed is None:
+            failed = _get(inst, type_, group)
+        else:
+            _unread(type_, group, failed)
 
 
-def _get(inst: Any, type_: str, group: list[Held]) -> None:
+def _get(inst: Any, type_: str, group: list[Held]) -> FmiError | None:
+    """Read ``group``; the error when the call put the instance in Terminated, else None."""
     try:
         values = inst.get_typed(type_, [h.var.vr for h in group],
                                 sum(len(h.start) for h in group))
     except FmiError as exc:
         for h in group:
             h.error = exc
-        return
+        return exc if exc.status in ("fmi3Error", "fmi3Fatal") else None
     k = 0
     for h in group:
         h.held = values[k:k + len(h.start)]
         k += len(h.start)
+    return None
+
+
+def _unread(type_: str, group: list[Held], failed: FmiError) -> None:
+    """Mark ``group`` unread: its call was not made after ``failed``."""
+    error = FmiError(GETTERS[type_][0], "not called")
+    error.after = failed.after or failed
+    for h in group:
+        h.error = error

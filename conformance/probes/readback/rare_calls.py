@@ -163,7 +163,10 @@ def _set_boolean(inst: Instance, vr: int) -> None:
 
 def illegal_call_accepted(ctx: ProbeContext) -> Iterator[Violation]:
     """SG-09, PD-01, PD-05 (and §2.2.4: illegal arguments give fmi3Error): each illegal call,
-    on a fresh instance in Continuous-Time Mode (Instantiated for fmi3SetBoolean), is refused."""
+    on a fresh instance in Continuous-Time Mode, is refused. fmi3SetBoolean is made in
+    Configuration Mode (entered from Instantiated, left before the instance is freed), where it
+    breaks two rules at once: the type (SG-09) and FMI 3.0.2 §2.3.6 (a Float64 state is no
+    structural parameter)."""
     layout = layout_of(ctx)
     library = ctx.facts["library"]
     started = [mode for mode in layout.modes if getattr(ctx, mode) is not None]

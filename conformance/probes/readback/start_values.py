@@ -50,8 +50,9 @@ def start_value_not_applied(ctx: ProbeContext, *, rtol: float,
         raise ProbeSkipped(snapshot.reason)
     read = [h for h in snapshot.items if h.held is not None]
     if not read:
-        first = snapshot.items[0].error
-        raise ProbeSkipped(f"the FMU answers no fmi3Get* after instantiation ({first.call} "
+        # the first refusal: the calls after an fmi3Error were not made (read_held)
+        first = next((h.error.after or h.error for h in snapshot.items if h.error), None)
+        raise ProbeSkipped(f"nothing could be read after instantiation ({first.call} "
                            f"returned {first.status})" if first else "nothing could be read")
     for h in read:
         wrong = mismatched(h, rtol=rtol, float32_rtol=float32_rtol)

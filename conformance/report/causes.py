@@ -7,9 +7,15 @@ Two violations that name one key are one defect (``conformance.run.causes`` fold
   wrong formula or a wrong partial derivative spoils is one finding, and so does a variable the
   FMU does not let an importer set or read;
 * :func:`failing` -- the FMU fails to evaluate in one state of one mode: the call that stops
-  its run, and the reads refused there, are one defect.
+  its run, and the reads refused there, are one defect;
+* :data:`STALE` -- values read after a setter moved the point are the previous point's.
 """
 from __future__ import annotations
+
+
+#: The cause 'the FMU does not bring its evaluation to the point an importer set' (one cache
+#: of the FMU's, whatever group of variables or mode shows it).
+STALE = "evaluation not brought to the new point"
 
 
 def through(name: str) -> str:

@@ -296,7 +296,7 @@ def stale_values_read(ctx: ProbeContext, *, rtol: float, atol: float) -> Iterato
                 evidence(group=name, alone=x, at_new_point=y, previous_point=old,
                          points=[a.label, moved.label], changed_by=after_calls,
                          mode=_mode(mode), rtol=rtol, atol=atol),
-                layout.name(vr))
+                layout.name(vr), cause=(causes.STALE, causes.through(layout.name(vr))))
 
 
 PROBES = {

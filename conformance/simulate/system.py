@@ -25,6 +25,8 @@ fmi3GetContinuousStates. An FMU without event indicators sees none of these call
 """
 from __future__ import annotations
 
+import math
+
 from typing import Any, Iterable, Sequence
 
 import numpy as np
@@ -250,6 +252,7 @@ class FmuOde(_Events):
         self._set_at: tuple[float, bytes] | None = None
         self._algebraic_readable = True
         self._event_mode = False   # entered Event Mode and not left it (terminateSimulation)
+        self._at_event: tuple[float, np.ndarray] = (math.nan, np.empty(0))
 
     @property
     def fmi_calls(self) -> int:
@@ -284,6 +287,9 @@ class FmuOde(_Events):
             raise _failed(exc) from None
 
     def enter_event_mode(self, t: float, y: np.ndarray) -> None:
+        # what the FMU computes at the event's (t, x) before it enters Event Mode: the output a
+        # run the FMU ends there records, as the DAE-mode run records its own solve at (t, x)
+        self._at_event = (float(t), self.algebraic_values(t, y))
         super().enter_event_mode(t, y)
         self._event_mode = True
 
@@ -294,13 +300,16 @@ class FmuOde(_Events):
     def algebraic_values(self, t: float, x: np.ndarray) -> np.ndarray:
         """The algebraic variables the FMU computes in ODE mode (NaN if not readable). In Event
         Mode (a run the FMU ended with terminateSimulation, recording its last output at the
-        event) they are read at the event's (t, x) without setting them: FMI 3.0.2 §2.3.5
-        allows neither fmi3SetTime nor fmi3SetContinuousStates there."""
+        event) they are those read at the event's (t, x) before the FMU entered Event Mode
+        (nothing is set there: FMI 3.0.2 §2.3.5 allows neither fmi3SetTime nor
+        fmi3SetContinuousStates), NaN at another time."""
         if not self.algebraic or not self._algebraic_readable:
             return np.full(len(self.algebraic), np.nan)
+        if self._event_mode:
+            at, values = self._at_event
+            return values.copy() if at == float(t) else np.full(len(self.algebraic), np.nan)
         try:
-            if not self._event_mode:
-                self._set(t, x)
+            self._set(t, x)
             return self.inst.get_float64(self.algebraic)
         except FmiError:
             self._set_at = None

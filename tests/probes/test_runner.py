@@ -217,9 +217,9 @@ def test_one_worker_per_fmu(monkeypatch):
     starts = []
     original = driver.Driver._start
 
-    def counting(self):
+    def counting(self, *args):
         starts.append(1)
-        return original(self)
+        return original(self, *args)
 
     monkeypatch.setattr(driver.Driver, "_start", counting)
     check_fmu(build_scene("SimpleDAE"), options=EngineOptions(probes=True))
@@ -230,9 +230,9 @@ def test_fatal_status_restarts_the_worker_without_a_finding(monkeypatch):
     starts = []
     original = driver.Driver._start
 
-    def counting(self):
+    def counting(self, *args):
         starts.append([r.code for r in self.remaining])
-        return original(self)
+        return original(self, *args)
 
     monkeypatch.setattr(driver.Driver, "_start", counting)
     fmu = build_scene("HelloWorldDAE", defines=["DEFECT_FATAL_DIRECTIONAL"])

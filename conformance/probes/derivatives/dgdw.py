@@ -256,7 +256,17 @@ def ode_dae_inconsistent(ctx: ProbeContext, *, rtol: float, margin: float,
             "ODE mode and DAE mode disagree: at the same time, states and inputs, the "
             "derivatives or outputs of ODE mode differ from those of DAE mode at the algebraic "
             "variables that solve the residuals", layout.rows[res_i[0]].location,
-            evidence(worst[1]), cause=causes.through(worst[1]["worst"]))
+            evidence(worst[1]), cause=_differing(worst[1]))
+
+
+def _differing(found: dict) -> tuple[str, ...]:
+    """The cause of a disagreement of the modes: each derivative or output that differs
+    beyond its tolerance (the worst first); their partial derivatives and trajectories show
+    the same formula."""
+    ode, dae, tol = found["ode"], found["dae"], found["tolerance"]
+    names = [found["worst"], *(n for n in ode if n != found["worst"] and n in dae and n in tol
+                               and abs(dae[n] - ode[n]) > tol[n])]
+    return tuple(causes.through(n) for n in names)
 
 
 PROBES = {

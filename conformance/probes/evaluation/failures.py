@@ -125,7 +125,8 @@ def evaluation_failed(ctx: ProbeContext) -> Iterator[Violation]:
                 f"setting the {kind} in DAE mode fails at point {point.label}: "
                 f"{exc.call} returned {exc.status}", root_location(ctx),
                 evidence(error_evidence(exc), point=point.label, t=point.t, setting=kind,
-                         mode="DAE mode, Continuous-Time Mode"), subject=exc.call)
+                         mode="DAE mode, Continuous-Time Mode"), subject=exc.call,
+                cause=causes.failing("Continuous-Time Mode", "DAE mode"))
             continue
         try:
             dae.set_algebraic(point)
@@ -143,7 +144,7 @@ def evaluation_failed(ctx: ProbeContext) -> Iterator[Violation]:
                     root_location(ctx),
                     evidence(error_evidence(exc), point=point.label, t=point.t,
                              unknowns=[layout.name(vr) for vr in unknowns]),
-                    subject=exc.call)
+                    subject=exc.call, cause=causes.failing("Continuous-Time Mode", "DAE mode"))
                 break
 
 

@@ -284,14 +284,15 @@ class Diagnosis:
                 subject=took or call or probe))
         else:
             illegal = facts["call_in_progress"] and call in ILLEGAL_CALLS.get(probe, ())
-            # the same crash (the call in progress, the same way of dying) reached by several
-            # probes is one defect: one finding, the probes listed in its evidence; a call of
-            # one variable names it, and joins the crashes of calls that read it with others
+            # the same crash (the same way of dying, during an FMI call) reached by several
+            # probes or calls is one defect (a corrupted memory crashes where it is next
+            # touched): one finding, the probes listed in its evidence; a call of one variable
+            # names it, and joins the crashes of calls that read it with others
             same: tuple[str, ...] = ()
             of, refs, keys = "", {}, ()
             if call and facts["call_in_progress"]:
                 of, refs, keys = self._variables()
-                same = (f"the binary crashed ({how}) during {call}", *keys)
+                same = (f"the binary crashed ({how})", *keys)
                 self._to_narrow(call, how)
             self.run.emit(CRASHED, Violation(
                 f"the binary crashed ({how}) {where.replace(f'during {call}', f'during {call}{of}', 1)}"

@@ -77,3 +77,40 @@ def growth(x: Sequence[float], y: Sequence[float]) -> Growth | None:
         slope=slope, total=slope * float(late_x[-1] - late_x[0]), quarters=quarters,
         quarter_totals=(quarters[0] * spans[0], quarters[1] * spans[1]),
         rise=float(late_y[-1] - late_y[0]), samples=n - half)
+
+
+@dataclass(frozen=True)
+class Attribution:
+    """The growth of y attributed to the columns of X (the calls of each FMI function) over the
+    second half of a run: ``per_unit[j]``, the least-squares dy per unit of column j, and
+    ``totals[j]``, that times column j's increase across the second half; ``rank``: the rank of
+    the centred columns there (below their number, some could not be told apart)."""
+
+    per_unit: tuple[float, ...]
+    totals: tuple[float, ...]
+    rank: int
+
+
+def attribute(counts: Sequence[Sequence[float]], y: Sequence[float]) -> Attribution | None:
+    """Least squares of ``y`` on the columns of ``counts`` (n samples by k columns, each
+    non-decreasing) with an intercept, over the second half of the samples: how much of y's
+    growth each column explains. None when the second half holds no more samples than
+    columns (nothing could be told apart)."""
+    xs = np.asarray(counts, dtype=float)
+    ys = np.asarray(y, dtype=float)
+    n = min(len(xs), len(ys))
+    if n < MIN_SAMPLES or xs.ndim != 2:
+        return None
+    half = n // 2
+    late_x, late_y = xs[half:n], ys[half:n]
+    if late_x.shape[0] <= late_x.shape[1] + 1:
+        return None
+    dx = late_x - late_x.mean(axis=0)
+    dy = late_y - late_y.mean()
+    scale = np.abs(dx).max(axis=0)
+    scale[scale == 0] = 1.0
+    coef, _, rank, _ = np.linalg.lstsq(dx / scale, dy, rcond=None)
+    per_unit = coef / scale
+    span = late_x[-1] - late_x[0]
+    return Attribution(tuple(float(v) for v in per_unit),
+                       tuple(float(v) for v in per_unit * span), int(rank))

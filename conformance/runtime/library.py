@@ -26,11 +26,13 @@ from __future__ import annotations
 import ctypes
 import itertools
 import os
+import random
 import shutil
 import time
 from typing import Any, Callable, Sequence
 
 from .callrecord import VALUE_CALLS, CallRecord
+from .child import heap_in_use
 from .errors import FmiError, Unavailable
 from .host import host_platform_tuple, library_extension
 from .layout import Layout
@@ -58,6 +60,18 @@ def address_space() -> int | None:
         return None
 
 
+#: Which calls are measured, one in WATCH_EVERY at random (seeded: the same calls in every
+#: run), not every WATCH_EVERY-th: a loop of calls whose period shares a factor with
+#: WATCH_EVERY would alias (a path step of twelve calls would never measure the calls at odd
+#: places in it), and so would any fixed stride near a rational multiple of the period.
+_SAMPLER = random.Random(20)
+
+
+def sampled() -> bool:
+    """Whether the next call's growth is measured (one in WATCH_EVERY, at random)."""
+    return _SAMPLER.random() * WATCH_EVERY < 1.0
+
+
 _RECORDING_CLASS: Any = None
 _COPIES = itertools.count(1)    # the folders of the copies made by Library.alone
 
@@ -73,6 +87,12 @@ def _recording_class() -> Any:
             lsdae_calls = 0
             lsdae_seconds = 0.0
             lsdae_log: list[str]
+            # per FMI function, in this process (every copy of the binary Library.alone
+            # loads counts here too: a probe re-run with every instance alone walks its path
+            # on copies): calls made, address-space and C-heap growth measured inside them
+            lsdae_by_call: dict[str, int] = {}
+            lsdae_grown_by: dict[str, int] = {}
+            lsdae_heap_by: dict[str, int] = {}
             lsdae_blocked: frozenset[str] = frozenset()
             lsdae_fatal = False
             lsdae_fatal_call = ""           # the first call that returned fmi3Fatal
@@ -86,6 +106,7 @@ def _recording_class() -> Any:
                                       "did not return (binary-timed-out) or returned fmi3Fatal")
                 del self.lsdae_log[:]  # the log holds the messages of the last call only
                 before = self._lsdae_before()
+                heap = heap_in_use() if before is not None else None
                 if fname in VALUE_CALLS and len(args) > 2:
                     n = args[2]
                     self.lsdae_record.enter(fname, self.lsdae_calls + 1, args[1],
@@ -97,10 +118,19 @@ def _recording_class() -> Any:
                 self.lsdae_seconds += time.perf_counter() - started
                 self.lsdae_record.leave()
                 self.lsdae_calls += 1
+                by_call = self.lsdae_by_call
+                by_call[fname] = by_call.get(fname, 0) + 1
+                if heap is not None:
+                    kept = heap_in_use()
+                    if kept is not None and kept > heap:
+                        heap_by = self.lsdae_heap_by
+                        heap_by[fname] = heap_by.get(fname, 0) + kept - heap
                 if before is not None:
                     after = address_space()
                     if after is not None and after > before:
                         self.lsdae_grown += after - before
+                        grown_by = self.lsdae_grown_by
+                        grown_by[fname] = grown_by.get(fname, 0) + after - before
                         self.lsdae_record.grew(fname, self.lsdae_grown)
                         # a sampled call stands for WATCH_EVERY: watch every call once the
                         # calls' estimated growth passed WATCH_FROM
@@ -119,7 +149,7 @@ def _recording_class() -> Any:
                 this one is sampled (one in WATCH_EVERY); else None. Only what grows inside
                 the calls counts: lsdae's own growth between them (its imports, its arrays)
                 never makes every call watched, which would slow every call down."""
-                if self.lsdae_watch or self.lsdae_calls % WATCH_EVERY == 0:
+                if self.lsdae_watch or sampled():
                     return address_space()
                 return None
 
@@ -205,6 +235,18 @@ class Library:
     @property
     def calls(self) -> int:
         return self.fmu.lsdae_calls
+
+    def calls_by_function(self) -> dict[str, int]:
+        """How many calls of each FMI function the process has made so far, through this
+        library and its copies (a copy of the counts)."""
+        return dict(self.fmu.lsdae_by_call)
+
+    def growth_by_function(self) -> dict[str, int]:
+        """The growth measured inside each FMI function (bytes; the calls measured: one in
+        WATCH_EVERY, every call once the growth passed WATCH_FROM): of the C heap in use where
+        glibc tells it (a leak served from free heap pages grows no address space), else of
+        the address space."""
+        return dict(self.fmu.lsdae_heap_by or self.fmu.lsdae_grown_by)
 
     @property
     def seconds(self) -> float:

@@ -93,6 +93,8 @@
  *   DEFECT_NOMINAL_NOT_XML         fmi3GetNominalsOfContinuousStates: the first is 1.1 times the XML's
  *   DEFECT_RESET_KEEPS_TIME        fmi3Reset keeps time and the evaluation cache
  *   DEFECT_RESET_KEEPS_GUESS       fmi3Reset keeps the algebraic variables' last values
+ *   DEFECT_W_START_DAE             switching DAE mode on in Configuration Mode moves the first
+ *                                  algebraic variable 0.5 off its XML start (DAE mode only)
  * and for the event and call probes (tests/fixtures/defects/events.py):
  *   DEFECT_EVENT_OUTPUTS_UNWRITTEN fmi3UpdateDiscreteStates returns fmi3OK without running the
  *                                  event or writing its output arguments
@@ -1371,25 +1373,27 @@ fmi3Status fmi3Terminate(fmi3Instance instance) {
 
 fmi3Status fmi3Reset(fmi3Instance instance) {
     BEGIN("fmi3Reset", ANY_STATE);
-#ifdef DEFECT_RESET_KEEPS_SWITCH
-    {   /* the DAE switch and the first state survive the reset */
-        fmi3Boolean dae = c->d.dae;
-        double x0 = NX > 0 ? c->x[0] : 0.0;
-        reset_data(c);
-        c->d.dae = dae;
-        if (NX > 0) c->x[0] = x0;
-        return fmi3OK;
-    }
-#endif
-#if defined(DEFECT_RESET_KEEPS_TIME) || defined(DEFECT_RESET_KEEPS_GUESS)
-    {   /* time and the evaluation cache, or the algebraic variables, survive the reset */
+#if defined(DEFECT_RESET_KEEPS_SWITCH) || defined(DEFECT_RESET_KEEPS_TIME) || \
+    defined(DEFECT_RESET_KEEPS_GUESS)
+    {   /* what survives the reset: the DAE switch and the first state, time and the evaluation
+           cache, or the algebraic variables (the defects combine) */
         Data kept = c->d;
+        double x0 = NX > 0 ? c->x[0] : 0.0;
         memcpy(c->wt, c->w, sizeof(double) * (size_t)NW);
         reset_data(c);
+        (void)kept; (void)x0;
+#ifdef DEFECT_RESET_KEEPS_SWITCH
+        c->d.dae = kept.dae;
+        if (NX > 0) c->x[0] = x0;
+#ifdef DEFECT_W_START_DAE
+        if (c->d.dae) c->w[0] = MODEL.w_start[0] + 0.5;   /* DAE mode's start, as on the switch */
+#endif
+#endif
 #ifdef DEFECT_RESET_KEEPS_TIME
         c->d.t = kept.t;
         c->d.eval_valid = kept.eval_valid;
-#else
+#endif
+#ifdef DEFECT_RESET_KEEPS_GUESS
         memcpy(c->w, c->wt, sizeof(double) * (size_t)NW);
 #endif
         return fmi3OK;
@@ -1564,6 +1568,11 @@ fmi3Status fmi3SetBoolean(fmi3Instance instance, const fmi3ValueReference vr[], 
         FAIL("fmi3SetBoolean: the structural parameter %u cannot be set in %s",
              (unsigned)MODEL.vr_enable, state_name(c->d.state));
     for (k = 0; k < nvr; k++) c->d.dae = values[k] ? fmi3True : fmi3False;
+#ifdef DEFECT_W_START_DAE
+    /* the DAE mode's algebraic variables start elsewhere than the XML says (a binary that sets
+       them when the mode is chosen, as ODE mode computes them when read) */
+    if (nvr && c->d.dae && c->d.state == ConfigurationMode) c->w[0] = MODEL.w_start[0] + 0.5;
+#endif
 #if defined(DEFECT_SHARED) && DEFECT_SHARED == SHARED_MODE
     if (nvr && SHARED_WRITES(c)) {
         shared_dae = c->d.dae;

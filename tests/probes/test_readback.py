@@ -194,14 +194,37 @@ RESETS = [  # (defines, the variables named)
     (("DEFECT_RESET_KEEPS_TIME",), set()),
     (("DEFECT_RESET_KEEPS_GUESS",), {"z2"}),
     (("DEFECT_RESET_KEEPS_SWITCH",), {"ODE_DAE_Switch", "x1"}),
+    # issue 30.3: the reset keeps the switch, and the algebraic variables too: compared with a
+    # fresh instance in DAE mode (the mode the reset left it in), z2 is still a defect of its own
+    (("DEFECT_RESET_KEEPS_SWITCH", "DEFECT_RESET_KEEPS_GUESS"), {"ODE_DAE_Switch", "x1", "z2"}),
+    # the reset keeps the switch, and DAE mode holds z1 at 0.5 (its start is 0): z1 reads as a
+    # fresh DAE-mode instance reads it, a consequence of the switch, listed in its finding
+    (("DEFECT_RESET_KEEPS_SWITCH", "DEFECT_W_START_DAE"), {"ODE_DAE_Switch", "x1"}),
 ]
 
 
-@pytest.mark.parametrize("defines,named", RESETS, ids=[r[0][0] for r in RESETS])
+@pytest.mark.parametrize("defines,named", RESETS, ids=["+".join(r[0]) for r in RESETS])
 def test_reset_against_a_fresh_instance(defines, named):
     findings = _findings("SimpleDAE", defines, "DAE712")
     assert {f.subject for f in findings} == named
     assert {f.subject for f in findings if f.part == "switch-kept"} == named & {"ODE_DAE_Switch"}
+
+
+def test_what_only_the_kept_switch_explains_is_listed_in_its_finding():
+    """Issue 30.3, the first cause decided from evidence: after fmi3Reset the switch is still
+    true, and z1 reads 0.5 where a fresh instance reads 0 (ODE mode) and a fresh instance with
+    the switch set reads 0.5 (DAE mode): a consequence of the switch, in its finding's evidence
+    and message; x1, which no fresh instance holds, stays a finding of its own."""
+    findings = _findings("SimpleDAE", ("DEFECT_RESET_KEEPS_SWITCH", "DEFECT_W_START_DAE"),
+                         "DAE712")
+    (switch,) = [f for f in findings if f.part == "switch-kept"]
+    ev = switch.evidence_dict()
+    assert thaw(ev["consequences"]) == [{"variable": "z1", "after_reset": 0.5,
+                                         "instantiated": 0.0, "instantiated_dae_mode": 0.5}]
+    assert switch.message.endswith("; 1 variable(s) read after the reset as in DAE mode, which "
+                                   "the switch explains: 'z1'")
+    assert ev["compared_with"].startswith("a fresh instance in DAE mode")
+    assert {f.subject for f in findings} == {"ODE_DAE_Switch", "x1"}
 
 
 def test_which_variables_are_readable_in_which_state():

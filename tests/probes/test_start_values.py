@@ -149,3 +149,39 @@ def test_a_discarded_read_does_not_stop_the_others():
 ])
 def test_how_a_value_is_compared(type_, held, start, expected):
     assert differs(type_, held, start, rtol=1e-12, float32_rtol=2e-7) is expected
+
+
+def test_a_start_that_only_dae_mode_misses_is_found_and_says_so():
+    """Issue 30.1: SimpleDAE holds z1's XML start (0) in ODE mode; once the switch is set true in
+    Configuration Mode it holds 0.5. The DAE-mode snapshot (a fresh instance, the switch set,
+    read in Instantiated) shows it: one finding, naming DAE mode as the only mode that does."""
+    from tests.fixtures import build_scene
+    report = check_fmu(build_scene("SimpleDAE", defines=["DEFECT_W_START_DAE"]),
+                       options=EngineOptions(probes=True, select=("DAE713",)))
+    (f,) = report.findings
+    ev = f.evidence_dict()
+    assert (f.code, f.severity, f.subject, f.location.file, f.location.line) == (
+        "DAE713", Severity.ERROR, "z1", "modelDescription.xml", 24)
+    assert (ev["modes"], ev["start"], ev["held"], dict(ev["held_by_mode"])) == (
+        "DAE", 0.0, 0.5, {"DAE": 0.5})
+    assert f.message == (
+        "after fmi3InstantiateModelExchange and the enable parameter set true in Configuration "
+        "Mode, before any other fmi3Set*, fmi3GetFloat64 returns 0.5 for 'z1', whose XML start "
+        "is 0.0 (initial=\"approx\"), in DAE mode only (ODE mode holds it): an importer that "
+        "trusts the XML starts from another point than the binary")
+
+
+def test_a_start_both_modes_miss_is_one_finding_naming_both():
+    """The XML says z1 starts at -1, the binary holds 0 in either mode: one finding."""
+    report = check_fmu(variant("SimpleDAE", md_edits=((
+        'name="z1" valueReference="5" causality="local" variability="continuous" '
+        'initial="approx" start="0.0"',
+        'name="z1" valueReference="5" causality="local" variability="continuous" '
+        'initial="approx" start="-1"'),)), options=EngineOptions(probes=True, select=("DAE713",)))
+    (f,) = report.findings
+    ev = f.evidence_dict()
+    assert (f.subject, ev["modes"], dict(ev["held_by_mode"])) == (
+        "z1", "ODE and DAE", {"ODE": 0.0, "DAE": 0.0})
+    assert f.message.startswith("after fmi3InstantiateModelExchange, before any fmi3Set*, "
+                                "fmi3GetFloat64 returns 0.0 for 'z1', whose XML start is -1.0")
+    assert "in ODE and DAE mode:" in f.message

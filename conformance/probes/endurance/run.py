@@ -16,6 +16,14 @@ which tells a failure that comes with use from one that belongs to the point. A 
 because memory grew by ``max_growth_mib`` ends as "memory": that growth is itself
 ``memory-grows``'s finding.
 
+So that the growth can be told function by function, the mix of calls changes from one memory
+sample to the next: between two samples one function of the step (in turn: each base call,
+each optional call, the instance cycle) is *emphasised*, made ``EMPHASIS`` more times at every
+step (the instance cycle once more every ``CYCLE_EVERY`` steps), and every sample records how
+many calls of each function the library had made. ``memory-grows`` fits the growth on those
+counts (:func:`conformance.numerics.growth.attribute`): a leak in one function follows that
+function's count, whatever the others do.
+
 The budget is counted, never timed, so that the run, and every verdict on it, is the same on
 every machine: ``calls_<level>`` FMI calls, and ``values_<level>`` values set and read (the
 lengths of the arrays a step passes), which keeps a model of 10,000 variables from taking a
@@ -39,12 +47,13 @@ from typing import Any
 import numpy as np
 
 from ...report.catalogue import default_catalogue
-from ...runtime.child import memory_info
+from ...runtime.child import heap_in_use, memory_info
 from ...runtime.instance import Instance
 from ...runtime.layout import Layout
 from ..instruments.api import FmiError, Point, ProbeContext, ProbeSkipped
 from ..instruments.common import dae_of, error_evidence, layout_of
-from .calls import StepCalls
+from ...runtime.arrays import pick, present
+from .calls import INSTANCE_CYCLE, StepCalls
 
 try:
     import resource
@@ -54,6 +63,10 @@ except ImportError:  # pragma: no cover - not POSIX: samples at the call interva
 SETTINGS_RULE = "evaluation-fails-late"
 FACT = "endurance.path"
 SEGMENT_STEPS = 16      # evaluations between two sampled points of the path
+EMPHASIS = 2            # extra calls of the emphasised function at every step
+CYCLE_EVERY = 8         # steps between two extra instance cycles when the cycle is emphasised
+BASE_CALLS = ("fmi3SetTime", "fmi3SetContinuousStates", "fmi3SetFloat64", "fmi3GetFloat64",
+              "fmi3GetContinuousStateDerivatives")
 LEVELS = ("quick", "long")
 
 
@@ -87,6 +100,14 @@ class PathRun:
     stopped: str = ""               # "budget", "time", "failure" or "memory"
     failure: dict[str, Any] | None = None
     samples: list[tuple[int, int]] = field(default_factory=list)  # (calls so far, VmRSS bytes)
+    # the calls of each function of the rotation made so far, at each sample (its columns are
+    # ``functions``); the instance cycle counts its fmi3InstantiateModelExchange
+    counts: list[list[int]] = field(default_factory=list)
+    # the C heap in use at each sample (``runtime.child.heap_in_use``; empty without it)
+    heap: list[int] = field(default_factory=list)
+    functions: list[str] = field(default_factory=list)
+    # the address-space growth the library measured inside each FMI function, at the end
+    grown_by: dict[str, int] = field(default_factory=dict)
     memory_note: str = ""           # why there are no memory samples
     budget_calls: int = 0           # the FMI calls the budget allows this model (see _Walk)
     calls_made: dict[str, Any] = field(default_factory=dict)   # StepCalls.info()
@@ -194,6 +215,8 @@ class _Walk:
         self.nx = len(self.layout.states)
         self.extra = StepCalls(self.layout)
         self.first = 0
+        self.emphasis = ""          # the function made EMPHASIS more times at every step
+        self.rotation: list[str] = []
 
     def _budget_calls(self) -> int:
         """The FMI calls the budget allows: ``calls``, or fewer when the steps' arrays are so
@@ -212,6 +235,48 @@ class _Walk:
         if self.nx:
             inst.get_derivatives(self.nx)
         self.extra.run(inst)
+        if self.emphasis:
+            self._emphasise(inst, point, self.emphasis)
+
+    def _rotation(self, point: Point) -> list[str]:
+        """The functions one step calls (each base call the layout makes, each optional call
+        kept), and the instance cycle: the order in which they are emphasised."""
+        layout = self.layout
+        knowns = present(layout.algebraic, point.values) or present(layout.inputs,
+                                                                     point.values)
+        made = {"fmi3SetTime": True, "fmi3SetContinuousStates": self.nx > 0,
+                "fmi3SetFloat64": bool(knowns), "fmi3GetFloat64": bool(self.watch),
+                "fmi3GetContinuousStateDerivatives": self.nx > 0}
+        return [name for name in BASE_CALLS if made[name]] + list(self.extra.calls) + [
+            INSTANCE_CYCLE]
+
+    def _emphasise(self, inst: Instance, point: Point, name: str) -> None:
+        """The emphasised function, EMPHASIS more times at this step (the same arguments)."""
+        if name == INSTANCE_CYCLE:
+            if self.run.steps % CYCLE_EVERY == 0:
+                self._new().free()
+            return
+        for _ in range(EMPHASIS):
+            if name == "fmi3SetTime":
+                inst.set_time(point.t)
+            elif name == "fmi3SetContinuousStates":
+                inst.set_states(pick(point.values, self.layout.states_for("dae")))
+            elif name == "fmi3SetFloat64":
+                knowns = [*present(self.layout.algebraic, point.values),
+                          *present(self.layout.inputs, point.values)]
+                inst.set_float64(knowns, pick(point.values, knowns))
+            elif name == "fmi3GetFloat64":
+                inst.get_float64(self.watch)
+            elif name == "fmi3GetContinuousStateDerivatives":
+                inst.get_derivatives(self.nx)
+            else:
+                self.extra.call(inst, name)
+
+    def _count(self) -> list[int]:
+        """The calls of each function of the rotation so far (the cycle: its instantiations)."""
+        made = self.library.calls_by_function()
+        key = {INSTANCE_CYCLE: "fmi3InstantiateModelExchange"}
+        return [made.get(key.get(name, name), 0) for name in self.rotation]
 
     def _new(self) -> Instance:
         return self.ctx.new_instance("dae")  # type: ignore[return-value]
@@ -221,11 +286,13 @@ class _Walk:
         self.extra.prepare(self._new, lap[0])
         self.run.calls_made = self.extra.info()
         self.run.budget_calls = self._budget_calls()
+        self.rotation = self.run.functions = self._rotation(lap[0])
         inst = self._new()
         try:
             self._loop(inst, lap)
         finally:
             inst.free()
+        self.run.grown_by = self.library.growth_by_function()
         return self.run
 
     def _loop(self, inst: Instance, lap: list[Point]) -> None:
@@ -249,12 +316,19 @@ class _Walk:
                     rss = resident_bytes()
                     if rss is not None:
                         run.samples.append((run.calls, rss))
+                        run.counts.append(self._count())
+                        heap = heap_in_use()
+                        if heap is not None:
+                            run.heap.append(heap)
                         peak_at_sample = peak
                         if rss - run.samples[0][1] > limit:
                             run.stopped = "memory"
                             break
                     if run.calls >= next_sample:
                         next_sample += interval
+                        # the next function in turn is emphasised until the next sample
+                        self.emphasis = self.rotation[(next_sample // interval)
+                                                      % len(self.rotation)]
                 if run.calls >= budget:
                     run.stopped = "budget"
                     break

@@ -247,31 +247,56 @@ def reset_incomplete(ctx: ProbeContext, *, rtol: float, atol: float) -> Iterator
                                ) from None
     finally:
         inst.free()  # type: ignore[attr-defined]
-    if switch is not None and got_switch not in (expected_switch, instantiated_switch):
-        yield Violation(
-            f"after fmi3Reset the enable parameter {{subject}} is still {str(got_switch).lower()}"
-            f": the FMU stays in DAE mode, and the next run starts in the wrong mode (DAE-11)",
-            manifest_location(ctx, switch, ("Enable",)),
-            evidence(after_reset=got_switch, start=expected_switch, point=point.label),
-            subject=layout.name(switch), part="switch-kept")
-    yield from _against_fresh(ctx, layout, others, again, point, rtol=rtol, atol=atol)
+    kept = switch is not None and got_switch not in (expected_switch, instantiated_switch)
+    # The first cause: an instance the reset left in DAE mode is compared with a fresh instance
+    # in DAE mode too (the switch set in Configuration Mode). What only the mode explains is a
+    # consequence of the switch, listed in its finding; what a fresh DAE-mode instance does
+    # not read either is a defect of its own.
+    dae = snapshot.by_vr("dae") if kept and snapshot.dae is not None else None
+    consequences: list[dict[str, Any]] = []
+    own = list(_against_fresh(ctx, layout, others, again, point, rtol=rtol, atol=atol, dae=dae,
+                              consequences=consequences))
     for vr, a, b, held in zip(vrs, got, expected, instantiated):
         if any(close(float(a), float(v), rtol=rtol, atol=atol, scale=layout.scale(vr))
                for v in (b, held)):
             continue
-        yield Violation(
+        in_dae = dae.get(vr) if dae is not None else None
+        if in_dae is not None and in_dae.held is not None and close(
+                float(a), float(in_dae.held[0]), rtol=rtol, atol=atol, scale=layout.scale(vr)):
+            consequences.append({"variable": layout.name(vr), "after_reset": float(a),
+                                 "instantiated": float(held),
+                                 "instantiated_dae_mode": float(in_dae.held[0])})
+            continue
+        own.append(Violation(
             "after fmi3Reset {subject} kept a value set before the reset instead of its "
             "start value (MV-23)", var_location(ctx, vr),
             evidence(after_reset=float(a), start=float(b), set_before=point.values.get(vr),
                      instantiated=float(held), point=point.label, scale=layout.scale(vr)),
-            subject=layout.name(vr))
+            subject=layout.name(vr)))
+    if kept:
+        told = (f"; {len(consequences)} variable(s) read after the reset as in DAE mode, which "
+                "the switch explains: " + ", ".join(f"'{c['variable']}'" for c in consequences)
+                if consequences else "")
+        yield Violation(
+            f"after fmi3Reset the enable parameter {{subject}} is still {str(got_switch).lower()}"
+            f": the FMU stays in DAE mode, and the next run starts in the wrong mode (DAE-11)"
+            + told, manifest_location(ctx, switch, ("Enable",)),
+            evidence(after_reset=got_switch, start=expected_switch, point=point.label,
+                     consequences=consequences, compared_with="a fresh instance in DAE mode "
+                     "(the switch set true in Configuration Mode)" if dae is not None else
+                     "a fresh instance (no DAE-mode snapshot: " + snapshot.dae_reason + ")"),
+            subject=layout.name(switch), part="switch-kept")
+    yield from own
 
 
 def _against_fresh(ctx: ProbeContext, layout: Layout, fresh: list[Held], after: list[Held],
-                   point: Any, *, rtol: float, atol: float) -> Iterator[Violation]:
+                   point: Any, *, rtol: float, atol: float, dae: dict[int, Held] | None = None,
+                   consequences: list[dict[str, Any]] | None = None) -> Iterator[Violation]:
     """Every other variable a fresh instance read in Instantiated (start values of every type)
     against its reading after fmi3Reset: "the same state as if fmi3Instantiate had been called"
-    (FMI 3.0.2 §2.3.1)."""
+    (FMI 3.0.2 §2.3.1). ``dae``: when the reset kept the switch true, what a fresh instance
+    reads in DAE mode; a variable that reads as it does there is a consequence of the switch
+    (appended to ``consequences``), not a finding."""
     for h0, h1 in zip(fresh, after):
         if h1.held is None:
             exc = h1.error
@@ -286,6 +311,15 @@ def _against_fresh(ctx: ProbeContext, layout: Layout, fresh: list[Held], after: 
             continue
         if all(_same(h0.var.type, a, b, layout.scale(h0.var.vr), rtol, atol)  # type: ignore
                for a, b in zip(h0.held, h1.held)):  # type: ignore[arg-type]
+            continue
+        in_dae = dae.get(h0.var.vr) if dae is not None else None  # type: ignore[arg-type]
+        if in_dae is not None and in_dae.held is not None and all(
+                _same(h0.var.type, a, b, layout.scale(h0.var.vr), rtol, atol)  # type: ignore
+                for a, b in zip(in_dae.held, h1.held)):  # type: ignore[arg-type]
+            if consequences is not None:
+                consequences.append({"variable": h0.var.name, "after_reset": _plain(h1.held),
+                                     "instantiated": _plain(h0.held),
+                                     "instantiated_dae_mode": _plain(in_dae.held)})
             continue
         yield Violation(
             "after fmi3Reset {subject} reads a value set or computed before the reset, not "

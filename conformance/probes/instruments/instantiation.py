@@ -13,7 +13,11 @@ parameter it names) are read whole. A start the static stage flags (not a number
 is left out: the XML is at fault there, not the binary. Scalars of one type are read in one
 call, so a model of 100k variables costs a handful of calls.
 
-The snapshot is taken once per worker, on an instance of its own, and kept in ``ctx.facts``;
+The snapshot is taken in each mode the FMU offers: on a fresh instance (ODE mode: the switch
+false), and on another after the switch was set true in Configuration Mode (DAE mode, still in
+Instantiated, where start values hold as they do in ODE mode: an algebraic variable that ODE
+mode computes from the states may agree with its start by chance there, and hold another value
+in DAE mode, where the importer gives it). It is taken once per worker and kept in ``ctx.facts``;
 the probe stage runs ``start-value-not-applied`` first, so no other instance has been freed
 yet (an FMU that keeps state across instances is ``instances-not-independent``'s finding).
 """
@@ -25,6 +29,7 @@ from typing import Any
 
 from ...model.description import ModelDescription, Variable
 from ...runtime.records import GETTERS
+from ...runtime.modes import configure
 from .api import FmiError, ProbeContext
 from .common import new_instance
 
@@ -50,9 +55,15 @@ class Instantiated:
 
     items: list[Held] = field(default_factory=list)
     reason: str = ""
+    # the same variables (the switch left out) read after the switch was set true in
+    # Configuration Mode; None when the FMU has no usable switch or it could not be set
+    # (``dae_reason`` says why)
+    dae: list[Held] | None = None
+    dae_reason: str = ""
 
-    def by_vr(self) -> dict[int, Held]:
-        return {h.var.vr: h for h in self.items if h.var.vr is not None}
+    def by_vr(self, mode: str = "ode") -> dict[int, Held]:
+        items = self.items if mode == "ode" else (self.dae or [])
+        return {h.var.vr: h for h in items if h.var.vr is not None}
 
 
 def element_count(model: ModelDescription, var: Variable) -> int | None:
@@ -144,7 +155,33 @@ def _take(ctx: ProbeContext) -> Instantiated:
         read_held(inst, items)
     finally:
         inst.free()
-    return Instantiated(items)
+    result = Instantiated(items)
+    _take_dae(library, result)
+    return result
+
+
+def _take_dae(library: Any, result: Instantiated) -> None:
+    """The DAE-mode snapshot: a fresh instance, the switch set true in Configuration Mode, the
+    same variables read in Instantiated (the switch itself left out: it holds what was set)."""
+    layout = library.layout
+    if layout.enable is None or layout.enable_status != "ok":
+        result.dae_reason = "no usable enable parameter: the FMU has no DAE mode to read"
+        return
+    items = [Held(h.var, h.start) for h in result.items if h.var.vr != layout.enable]
+    try:
+        inst = new_instance(library, "instantiated-dae")
+    except FmiError as exc:
+        result.dae_reason = f"{exc.call} returned {exc.status}: nothing to read"
+        return
+    try:
+        configure(inst, True)
+        read_held(inst, items)
+        result.dae = items
+    except FmiError as exc:
+        result.dae_reason = (f"setting the enable parameter in Configuration Mode failed: "
+                             f"{exc.call} returned {exc.status}")
+    finally:
+        inst.free()
 
 
 def read_held(inst: Any, items: list[Held]) -> None:

@@ -41,3 +41,10 @@ class FmiError(Exception):
 
 class Unavailable(Exception):
     """What was asked cannot be done on this FMU; the message is the reason."""
+
+
+class Unsettled(Unavailable):
+    """The event iteration after initialisation does not settle: fmi3UpdateDiscreteStates keeps
+    saying discreteStatesNeedUpdate, so Continuous-Time Mode may not be entered (FMI 3.0.2
+    §2.3.5). What needs that mode is skipped with this reason; the probe that runs the FMU as
+    an importer does reports it."""

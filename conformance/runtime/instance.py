@@ -11,7 +11,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from .arrays import all_in, double_array, pick, present, vr_array
-from .errors import FmiError, Unavailable
+from .errors import FmiError, Unavailable, Unsettled
 from .library import Library
 from .point import Point
 from .records import GETTERS, Dependency, DiscreteStates, KnownNotSet, PointNotSet
@@ -104,7 +104,7 @@ class Instance:
             update = self.update_discrete_states_once()
             if not update.needs_update or update.terminate:
                 return update._replace(calls=calls)
-        raise Unavailable("the event iteration after initialisation does not settle: "
+        raise Unsettled("the event iteration after initialisation does not settle: "
                           "fmi3UpdateDiscreteStates still says discreteStatesNeedUpdate after "
                           f"{MAX_START_UPDATES} calls, and Continuous-Time Mode may not be "
                           "entered before it says false")

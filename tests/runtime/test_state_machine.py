@@ -283,11 +283,16 @@ def test_an_unsettled_iteration_is_unavailable_not_continuous_time_mode():
     assert fmu.illegal == []
 
 
-def test_the_handshake_is_skipped_when_the_iteration_does_not_settle():
+def test_the_handshake_reports_an_iteration_that_does_not_settle():
+    """Continuous-Time Mode is not entered (no illegal call), and the FMU an importer would
+    loop on in Event Mode is the handshake's finding, in DAE and in ODE mode, one cause."""
     fmu = StrictFmu(unsettled=1000)
     ctx = make_ctx(fmu)
-    with pytest.raises(ProbeSkipped, match="does not settle"):
-        list(handshake.enable_handshake(ctx))
+    found = list(handshake.enable_handshake(ctx))
+    assert [dict(v.evidence)["mode"] for v in found] == ["dae", "ode"]
+    assert all("the event iteration after initialisation does not settle" in v.text
+               and v.cause == handshake.UNSETTLED for v in found)
+    assert [v.part for v in found] == [None, "ode-run-fails"]
     assert fmu.illegal == [] and all(c.state == "freed" for c in fmu.components)
 
 

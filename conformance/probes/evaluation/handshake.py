@@ -17,7 +17,8 @@ from ..instruments.api import FmiError, ProbeContext, ProbeSkipped
 from ..instruments.common import (close, error_evidence, layout_of, manifest_location, new_instance,
                                   var_location)
 from ..instruments.instantiation import Held, instantiated_values, read_held
-from ...runtime.instance import Instance, KnownNotSet
+from ...runtime.errors import Unsettled
+from ...runtime.instance import MAX_START_UPDATES, Instance, KnownNotSet
 from ...runtime.layout import Layout
 from ...runtime.library import Library
 from ...runtime.modes import INIT_CALLS, configure, reconfigure
@@ -89,6 +90,11 @@ def _dae_handshake(ctx: ProbeContext, layout: Layout, library: Library, where: L
         steps("fmi3EnterContinuousTimeMode", inst.enter_continuous_time_mode)
         steps("fmi3GetContinuousStateDerivatives", inst.get_derivatives,
               len(layout.states))
+    except Unsettled as exc:   # an importer would loop in Event Mode for ever
+        yield Violation(
+            f"switching DAE mode on fails: {exc}", where,
+            evidence(call="fmi3UpdateDiscreteStates", sequence=steps.done, mode="dae",
+                     calls=MAX_START_UPDATES), subject, cause=UNSETTLED)
     except FmiError as exc:
         # the tunable switch refused in Reconfiguration Mode (entering it from Event Mode,
         # the set, or leaving it): not the switch at instantiation
@@ -104,6 +110,8 @@ def _dae_handshake(ctx: ProbeContext, layout: Layout, library: Library, where: L
 
 
 RECONFIGURE = "fmi3EnterConfigurationMode (Reconfiguration"
+#: One cause: the event iteration after initialisation does not settle, in either mode.
+UNSETTLED = "the event iteration after initialisation does not settle"
 
 
 def _reconfigure(inst: Instance, vr: int, steps: _Steps, where: Location,
@@ -141,6 +149,12 @@ def _ode_handshake(ctx: ProbeContext, layout: Layout, library: Library, where: L
             inst.set_point(point)
             steps(f"fmi3GetContinuousStateDerivatives at {point.label}", inst.get_derivatives,
                   len(layout.ode_states))
+    except Unsettled as exc:   # an importer would loop in Event Mode for ever
+        yield Violation(
+            f"with the enable parameter false the FMU does not run as an ordinary ODE FMU: {exc}",
+            where, evidence(call="fmi3UpdateDiscreteStates", sequence=steps.done, mode="ode",
+                            calls=MAX_START_UPDATES), subject, part="ode-run-fails",
+            cause=UNSETTLED)
     except FmiError as exc:
         if isinstance(exc, KnownNotSet) and exc.kind == "inputs":
             return  # an input refused in ODE mode is input-not-settable's finding

@@ -50,6 +50,9 @@ ILLEGAL_CALLS: dict[str, frozenset[str]] = {
     "DAE739": frozenset({"fmi3SetBoolean", "fmi3GetDirectionalDerivative",
                          "fmi3GetAdjointDerivative"})}
 
+#: The cause every crash of the binary names (``Violation.cause``): one finding for them all.
+CRASH_CAUSE = "the binary crashed"
+
 log = logging.getLogger(__name__)
 
 
@@ -284,16 +287,15 @@ class Diagnosis:
                 subject=took or call or probe))
         else:
             illegal = facts["call_in_progress"] and call in ILLEGAL_CALLS.get(probe, ())
-            # the same crash (the same way of dying, during an FMI call) reached by several
-            # probes or calls is one defect (a corrupted memory crashes where it is next
-            # touched): one finding, the probes listed in its evidence; a call of one variable
-            # names it, and joins the crashes of calls that read it with others
-            same: tuple[str, ...] = ()
+            # crashes reached by several probes or calls are one defect (a binary that
+            # corrupted its memory crashes wherever it next touches it, during a call or after
+            # one, by a signal or an abort): one finding, the probes listed in its evidence; a
+            # call of one variable names it, and joins the crashes of calls that read it
             of, refs, keys = "", {}, ()
             if call and facts["call_in_progress"]:
                 of, refs, keys = self._variables()
-                same = (f"the binary crashed ({how})", *keys)
                 self._to_narrow(call, how)
+            same = (CRASH_CAUSE, *keys)
             self.run.emit(CRASHED, Violation(
                 f"the binary crashed ({how}) {where.replace(f'during {call}', f'during {call}{of}', 1)}"
                 f", in {self.run.names(probe)}", Location(file=self.run.binary),

@@ -93,6 +93,7 @@
  *   DEFECT_NOMINAL_NOT_XML         fmi3GetNominalsOfContinuousStates: the first is 1.1 times the XML's
  *   DEFECT_RESET_KEEPS_TIME        fmi3Reset keeps time and the evaluation cache
  *   DEFECT_RESET_KEEPS_GUESS       fmi3Reset keeps the algebraic variables' last values
+ *   DEFECT_RESET_KEEPS_GUESS_DAE   ... and gives them back when DAE mode is switched on again
  *   DEFECT_W_START_DAE             switching DAE mode on in Configuration Mode moves the first
  *                                  algebraic variable 0.5 off its XML start (DAE mode only)
  * and for the event and call probes (tests/fixtures/defects/events.py):
@@ -215,6 +216,9 @@ typedef struct {
 
     char *name;
     unsigned long ncalls;              /* FMI calls on this instance (DEFECT_LATE_*) */
+#ifdef DEFECT_RESET_KEEPS_GUESS_DAE
+    int guess_kept;                    /* fmi3Reset kept w in wt, for DAE mode to take back */
+#endif
 #ifdef DEFECT_SHARED
     int ordinal;                       /* 1 for the process's first instance, 2, ... */
     int partials_valid;                /* pval is up to date (a cache, derivatives variant) */
@@ -1374,7 +1378,7 @@ fmi3Status fmi3Terminate(fmi3Instance instance) {
 fmi3Status fmi3Reset(fmi3Instance instance) {
     BEGIN("fmi3Reset", ANY_STATE);
 #if defined(DEFECT_RESET_KEEPS_SWITCH) || defined(DEFECT_RESET_KEEPS_TIME) || \
-    defined(DEFECT_RESET_KEEPS_GUESS)
+    defined(DEFECT_RESET_KEEPS_GUESS) || defined(DEFECT_RESET_KEEPS_GUESS_DAE)
     {   /* what survives the reset: the DAE switch and the first state, time and the evaluation
            cache, or the algebraic variables (the defects combine) */
         Data kept = c->d;
@@ -1395,6 +1399,9 @@ fmi3Status fmi3Reset(fmi3Instance instance) {
 #endif
 #ifdef DEFECT_RESET_KEEPS_GUESS
         memcpy(c->w, c->wt, sizeof(double) * (size_t)NW);
+#endif
+#ifdef DEFECT_RESET_KEEPS_GUESS_DAE
+        c->guess_kept = 1;
 #endif
         return fmi3OK;
     }
@@ -1572,6 +1579,13 @@ fmi3Status fmi3SetBoolean(fmi3Instance instance, const fmi3ValueReference vr[], 
     /* the DAE mode's algebraic variables start elsewhere than the XML says (a binary that sets
        them when the mode is chosen, as ODE mode computes them when read) */
     if (nvr && c->d.dae && c->d.state == ConfigurationMode) c->w[0] = MODEL.w_start[0] + 0.5;
+#endif
+#ifdef DEFECT_RESET_KEEPS_GUESS_DAE
+    /* the guess kept across fmi3Reset comes back when DAE mode is switched on again */
+    if (nvr && c->d.dae && c->guess_kept) {
+        memcpy(c->w, c->wt, sizeof(double) * (size_t)NW);
+        c->guess_kept = 0;
+    }
 #endif
 #if defined(DEFECT_SHARED) && DEFECT_SHARED == SHARED_MODE
     if (nvr && SHARED_WRITES(c)) {

@@ -200,6 +200,9 @@ RESETS = [  # (defines, the variables named)
     # the reset keeps the switch, and DAE mode holds z1 at 0.5 (its start is 0): z1 reads as a
     # fresh DAE-mode instance reads it, a consequence of the switch, listed in its finding
     (("DEFECT_RESET_KEEPS_SWITCH", "DEFECT_W_START_DAE"), {"ODE_DAE_Switch", "x1"}),
+    # the reset keeps the algebraic variables for DAE mode only: read again after the switch is
+    # set true in Configuration Mode, z2 is not what a fresh DAE-mode instance reads
+    (("DEFECT_RESET_KEEPS_GUESS_DAE",), {"z2"}),
 ]
 
 
@@ -208,6 +211,20 @@ def test_reset_against_a_fresh_instance(defines, named):
     findings = _findings("SimpleDAE", defines, "DAE712")
     assert {f.subject for f in findings} == named
     assert {f.subject for f in findings if f.part == "switch-kept"} == named & {"ODE_DAE_Switch"}
+
+
+def test_a_value_the_reset_keeps_for_dae_mode_only_is_found_in_dae_mode():
+    """Issue 30.1: after fmi3Reset the switch reads false and every start value holds in ODE
+    mode; with the switch set true again in Configuration Mode, z2 is the value of before the
+    reset, where a fresh DAE-mode instance reads 0."""
+    (f,) = _findings("SimpleDAE", ("DEFECT_RESET_KEEPS_GUESS_DAE",), "DAE712")
+    ev = f.evidence_dict()
+    assert (f.subject, ev["mode"], ev["instantiated_dae_mode"]) == ("z2", "DAE mode", 0.0)
+    assert ev["after_reset"] != 0.0
+    assert f.message == (
+        "after fmi3Reset and the enable parameter set true again in Configuration Mode, 'z2' "
+        "reads a value set or computed before the reset, not what a fresh instance reads in "
+        "DAE mode (MV-23)")
 
 
 def test_what_only_the_kept_switch_explains_is_listed_in_its_finding():

@@ -259,6 +259,7 @@ def reset_incomplete(ctx: ProbeContext, *, rtol: float, atol: float) -> Iterator
             raise ProbeSkipped(f"after fmi3Reset the FMU does not answer {exc.call} in "
                                f"Instantiated ({exc.status}): the reset cannot be checked"
                                ) from None
+        switched = _in_dae_mode(inst, snapshot, switch, got_switch)
     finally:
         inst.free()  # type: ignore[attr-defined]
     kept = switch is not None and got_switch not in (expected_switch, instantiated_switch)
@@ -287,6 +288,9 @@ def reset_incomplete(ctx: ProbeContext, *, rtol: float, atol: float) -> Iterator
             evidence(after_reset=float(a), start=float(b), set_before=point.values.get(vr),
                      instantiated=float(held), point=point.label, scale=layout.scale(vr)),
             subject=layout.name(vr)))
+    if switched:
+        yield from _dae_mode_after_reset(ctx, layout, snapshot, switched, own, point,
+                                         rtol=rtol, atol=atol)
     if kept:
         told = (f"; {len(consequences)} variable(s) read after the reset as in DAE mode, which "
                 "the switch explains: " + ", ".join(f"'{c['variable']}'" for c in consequences)
@@ -301,6 +305,47 @@ def reset_incomplete(ctx: ProbeContext, *, rtol: float, atol: float) -> Iterator
                      "a fresh instance (no DAE-mode snapshot: " + snapshot.dae_reason + ")"),
             subject=layout.name(switch), part="switch-kept")
     yield from own
+
+
+def _in_dae_mode(inst: Any, snapshot: Any, switch: int | None, got_switch: Any
+                 ) -> list[Held]:
+    """After a reset that set the switch back to false, the switch set true again in
+    Configuration Mode and every variable the fresh DAE-mode snapshot read, read again: a
+    value the reset kept may show in DAE mode only (ODE mode computes it when read). Empty
+    when there is no DAE-mode snapshot, the switch was kept, or the FMU refuses."""
+    if switch is None or got_switch is not False or not snapshot.dae:
+        return []
+    items = [Held(h.var, h.start) for h in snapshot.dae if h.held is not None]
+    try:
+        configure(inst, True)
+        read_held(inst, items)
+    except FmiError:
+        return []
+    return items
+
+
+def _dae_mode_after_reset(ctx: ProbeContext, layout: Layout, snapshot: Any,
+                          switched: list[Held], own: list[Violation], point: Any, *,
+                          rtol: float, atol: float) -> Iterator[Violation]:
+    """Each variable that reads, after the reset and the switch set true again, otherwise than
+    a fresh instance in DAE mode reads it (and was not named in ODE mode already)."""
+    named = {v.subject for v in own}
+    fresh = snapshot.by_vr("dae")
+    for h1 in switched:
+        h0 = fresh.get(h1.var.vr)  # type: ignore[arg-type]
+        if h0 is None or h0.held is None or h1.held is None or h1.var.name in named:
+            continue
+        if all(_same(h0.var.type, a, b, layout.scale(h0.var.vr), rtol, atol)  # type: ignore
+               for a, b in zip(h0.held, h1.held)):
+            continue
+        yield Violation(
+            "after fmi3Reset and the enable parameter set true again in Configuration Mode, "
+            "{subject} reads a value set or computed before the reset, not what a fresh "
+            "instance reads in DAE mode (MV-23)", var_location(ctx, h0.var.vr),  # type: ignore
+            evidence(after_reset=_plain(h1.held), instantiated_dae_mode=_plain(h0.held),
+                     type=h0.var.type, causality=h0.var.causality, mode="DAE mode",
+                     point=point.label),
+            subject=h0.var.name)
 
 
 def _against_fresh(ctx: ProbeContext, layout: Layout, fresh: list[Held], after: list[Held],

@@ -13,7 +13,6 @@ from typing import Any, Callable
 
 import numpy as np
 import pytest
-from lxml import etree
 
 from conformance.report.catalogue import default_catalogue
 from conformance.model.manifest import read_manifest
@@ -23,7 +22,7 @@ from conformance.probes.instruments.api import FmiError, Point, ProbeContext, Pr
 from conformance.probes.instruments.common import renew_failed
 from conformance.runtime.instance import Instance, KnownNotSet, PointNotSet
 from conformance.runtime.layout import Layout
-from tests.fixtures import SCENES_DIR
+from tests.fakelibrary import FakeLibrary, simple_dae_xml
 
 OPTIONS = {r.code: r.option_values for r in default_catalogue()}
 U1, U2, Z1, Z2 = 7, 8, 5, 6   # SimpleDAE's inputs and algebraic variables
@@ -88,33 +87,9 @@ def _vrs(args: tuple) -> list[int]:
     return [int(args[0][k]) for k in range(int(args[1]))]
 
 
-@dataclass
-class FakeLibrary:
-    layout: Layout
-    fmu: FakeFmu
-    resource_path: None = None
-    instances: list = field(default_factory=list)
-    fatal: bool = False
-    count: int = 0
-
-    def logger(self, name: str) -> Callable[..., None]:
-        return lambda env, status, category, message: None
-
-    def next_name(self, mode: str) -> str:
-        self.count += 1
-        return f"fake-{mode}-{self.count}"
-
-    def fmu_for_instance(self) -> FakeFmu:
-        return self.fmu
-
-
-def _xml(name: str) -> etree._ElementTree:
-    return etree.parse(str(SCENES_DIR / "SimpleDAE" / name))
-
-
 def make_ctx(refuse: Callable[[str, str, _Component, tuple], bool]) -> ProbeContext:
-    model = read_model_description(_xml("modelDescription.xml"))
-    manifest = read_manifest(_xml("fmi-ls-manifest.xml"), draft="alpha1")
+    model = read_model_description(simple_dae_xml("modelDescription.xml"))
+    manifest = read_manifest(simple_dae_xml("fmi-ls-manifest.xml"), draft="alpha1")
     library = FakeLibrary(Layout.build(model, manifest), FakeFmu(refuse))
 
     def new_instance(mode: str) -> Instance:

@@ -17,7 +17,6 @@ from typing import Any, Callable
 
 import numpy as np
 import pytest
-from lxml import etree
 
 from conformance.checks.context import CheckContext
 from conformance.checks.enable import enable_parameter_not_structural, \
@@ -33,7 +32,7 @@ from conformance.runtime.instance import Instance
 from conformance.runtime.layout import Layout
 from conformance.runtime.modes import reconfigure, start_instance
 from conformance.runtime.records import GETTERS
-from tests.fixtures import SCENES_DIR
+from tests.fakelibrary import FakeLibrary, simple_dae_xml
 
 X1 = 1   # SimpleDAE's state x1, a Float64
 
@@ -138,38 +137,9 @@ def _answer(c: _Component, fname: str, args: tuple) -> None:
                           else None if fname == "fmi3GetString" else 0)
 
 
-@dataclass
-class FakeLibrary:
-    layout: Layout
-    fmu: StrictFmu
-    resource_path: None = None
-    instances: list = field(default_factory=list)
-    fatal: bool = False
-    log: list = field(default_factory=list)
-    count: int = 0
-
-    def logger(self, name: str) -> Callable[..., None]:
-        return lambda env, status, category, message: None
-
-    def next_name(self, mode: str) -> str:
-        self.count += 1
-        return f"fake-{mode}-{self.count}"
-
-    def fmu_for_instance(self) -> StrictFmu:
-        return self.fmu
-
-
-def _xml(name: str, edits: tuple[tuple[str, str], ...] = ()) -> etree._ElementTree:
-    text = (SCENES_DIR / "SimpleDAE" / name).read_text(encoding="utf-8")
-    for old, new in edits:
-        assert text.count(old) == 1, old
-        text = text.replace(old, new)
-    return etree.ElementTree(etree.fromstring(text.encode()))
-
-
 def make_ctx(fmu: StrictFmu, md_edits: tuple[tuple[str, str], ...] = ()) -> ProbeContext:
-    model = read_model_description(_xml("modelDescription.xml", md_edits))
-    manifest = read_manifest(_xml("fmi-ls-manifest.xml"), draft="alpha1")
+    model = read_model_description(simple_dae_xml("modelDescription.xml", md_edits))
+    manifest = read_manifest(simple_dae_xml("fmi-ls-manifest.xml"), draft="alpha1")
     library = FakeLibrary(Layout.build(model, manifest), fmu)
     start = Point(0.0, {1: 0.5, 3: 0.5, 5: 0.1, 6: 0.2, 7: 0.0, 8: 0.0}, "start")
     return ProbeContext(model=model, manifest=manifest, draft="alpha1", seed=0,

@@ -6,7 +6,7 @@ STAMP  := $(VENV)/.installed-stamp
 DEMO   := build/demo
 SCENES := SimpleDAE Robertson HelloWorldDAE
 
-.PHONY: venv demo test fuzz bench mutation clean
+.PHONY: venv demo test fuzz bench mutation mutation-self clean
 
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -61,6 +61,15 @@ bench: $(STAMP)
 # Exits 1 while a survivor has no verdict in bench/mutation/verdicts.toml (docs/mutation.md).
 mutation: $(STAMP)
 	$(BIN)/python -m bench.mutation --fresh --out reports/mutation --stubs build/mutation-stubs.toml
+
+# Mutation testing of lsdae's own Python code with mutmut 3: each package against its
+# own tests, on 2 processes; writes reports/mutation-self/. Incremental: mutmut runs again only
+# the mutants of changed functions (build/mutation-self/). Options through MUTATION_SELF_ARGS,
+# e.g. MUTATION_SELF_ARGS="--packages numerics" or "--sample 200 --seed 1"; exits 1 while a
+# survivor has no verdict in bench/mutation_self_verdicts.toml (docs/mutation-self.md).
+MUTATION_SELF_ARGS ?=
+mutation-self: $(STAMP)
+	$(BIN)/python -m scripts.mutation_self $(MUTATION_SELF_ARGS)
 
 clean:
 	rm -rf build .cache

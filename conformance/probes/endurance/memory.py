@@ -74,6 +74,11 @@ def memory_grows(ctx: ProbeContext, *, bytes_per_call_quick: float, bytes_per_ca
     if (found.sustained_slope < bytes_per_call or found.total < min_growth_kib * KIB
             or min(found.quarter_totals) < min_growth_kib * KIB / 4):
         return
+    heap = growth(calls, run.heap) if len(run.heap) == len(run.samples) else None
+    if heap is not None and heap.total < min_growth_kib * KIB:
+        # the resident set grew, the C heap in use did not: the allocator keeping pages it
+        # got back (large instances made and freed), not memory the FMU keeps
+        return
     yield Violation(
         f"the worker's resident memory grows by {found.slope:,.0f} bytes per FMI call along "
         f"the path ({found.total / (1 << 20):,.1f} MiB over the last {span:,} of "

@@ -146,3 +146,27 @@ def test_ode_mode_discard_not_recovered():
     system = Decay(fail=discard_when(lambda t, x: t > 1.0))
     traj = integrate_ode(system, sim_settings(), t0=0.0, x0=np.array([1.0]), stop=2.0)
     assert traj.status == st.FMU_FAILED and traj.t_end <= 1.0
+
+
+def test_the_initial_slope_keeps_the_constraint_differentiated():
+    """IDA starts from y'(t0): x' = f, and w' from d/dt g = g_x x' + g_w w' = 0. The reduced Van
+    der Pol oscillator at y1 = 2 (y2 = -2/3 solves g): x' = y2 = -2/3, and w' = -10/27."""
+    from conformance.numerics.dae import _initial_slope
+    system = VanDerPol()
+    y = np.array([2.0, -2.0 / 3.0])
+    yp = _initial_slope(system, 0.0, y)
+    assert yp == pytest.approx([-2.0 / 3.0, -10.0 / 27.0], rel=1e-12)
+    jac = system.partials(0.0, y)
+    assert jac[1] @ yp == pytest.approx(0.0, abs=1e-12)
+
+
+def test_an_initial_slope_the_system_cannot_give_is_zero():
+    """A derivative that is not finite at t0 starts IDA from a slope of zero there."""
+    from conformance.numerics.dae import _initial_slope
+
+    class NotFinite(VanDerPol):
+        def evaluate(self, t, y):
+            return np.array([np.nan, super().evaluate(t, y)[1]])
+
+    yp = _initial_slope(NotFinite(), 0.0, np.array([2.0, -2.0 / 3.0]))
+    assert list(yp) == [0.0, 0.0]

@@ -122,3 +122,21 @@ def test_stiff_scales_do_not_fool_the_estimate():
 def test_noise_level():
     out = numdiff.noise_level(np.array([1.0, -2.0]), np.array([0.0, 3.0]), ulps=10)
     np.testing.assert_allclose(out, 10 * EPS * np.array([1.0, 5.0]))
+
+
+@pytest.mark.parametrize("method, value, truncation, calls", [
+    # f(s) = s^5 along d = 1: D(k) = (f(k) - f(-k)) / 2k = k^4, so D(1) = 1, D(2) = 16; the
+    # error estimate |D(2) - D(1)| / 3 = 5 bounds the true error 1 of D(1)
+    ("central", 1.0, 5.0, 4),
+    # R(k) = (4 D(k) - D(2k)) / 3: R(1) = -4, R(2) = -64, the estimate |R(2) - R(1)| / 15 = 4
+    # is the true error of R(1) exactly (R(k) = f'(0) + c k^4 for a quintic)
+    ("extrapolated", -4.0, 4.0, 6),
+])
+def test_the_error_estimate_of_each_method_on_a_quintic(method, value, truncation, calls):
+    """The estimates and their truncation bounds, by hand: f'(0) = 0, so the value is its own
+    error; the extrapolated one's estimate is exact (Richardson's c k^4 term)."""
+    fun = {"central": numdiff._central, "extrapolated": numdiff._extrapolated}[method]
+    found = fun(lambda step: np.asarray(step, dtype=float) ** 5, np.array([1.0]))
+    assert found.value == pytest.approx([value], rel=1e-12)
+    assert found.truncation == pytest.approx([truncation], rel=1e-12)
+    assert found.calls == calls

@@ -92,6 +92,15 @@ def test_scaled_condition_follows_nominal_values_and_detects_zero_rows():
     assert dead == math.inf
 
 
+def test_scaled_condition_weighs_a_residual_by_its_columns_nominal_values():
+    """g = x + 1e-6 w with w's nominal 1e6: w moves g by as much as x does (1 each, per
+    nominal), so G = (1e-6 * 1e6) / (1 + 1e-6 * 1e6) = 1/2 and the condition is 2; dividing by
+    the nominal instead would make w look 1e12 times weaker."""
+    jac = np.array([[0.0, 0.0], [1.0, 1e-6]])
+    cond, _ = scaled_condition(jac, 1, np.array([1.0, 1e6]), dense_up_to=DENSE)
+    assert cond == pytest.approx(2.0)
+
+
 def test_budget_detects_a_stall_and_counts_steps():
     budget = Budget(max_steps=100, wall_seconds=10.0, stall_steps=3, clock=lambda: 0.0)
     budget.progress(1.0, 1)

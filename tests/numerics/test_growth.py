@@ -2,8 +2,9 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
-from conformance.numerics.growth import MIN_SAMPLES, growth
+from conformance.numerics.growth import MIN_SAMPLES, attribute, growth
 
 CALLS = np.arange(0, 50_001, 1250, dtype=float)     # 41 samples, as a quick path run takes
 BASE = 45 << 20                                      # 45 MiB resident before the run
@@ -64,3 +65,59 @@ def test_a_step_in_a_short_run_leaves_the_other_quarter_a_creep_of_a_few_pages()
     found = growth(calls, rss)
     assert found is not None and found.sustained_slope > 64
     assert min(found.quarter_totals) < 8 * PAGE and max(found.quarter_totals) > 1 << 20
+
+
+def _rotated(samples: int, leak: dict[int, float], columns: int = 4, steps: int = 125,
+             noise_pages: bool = True) -> tuple[list[list[float]], list[float]]:
+    """Call counts of ``columns`` functions called once per step, the one in turn made three
+    times per step between two samples, and the heap growing by ``leak[j]`` bytes per call of
+    column j (plus a page now and then)."""
+    rng = np.random.default_rng(1)
+    counts, y = np.zeros(columns), 0.0
+    rows, heap = [], []
+    for k in range(samples):
+        made = np.full(columns, float(steps))
+        made[k % columns] += 2 * steps
+        counts = counts + made
+        y += sum(per * made[j] for j, per in leak.items())
+        y += 4096.0 * rng.integers(0, 2) if noise_pages else 0.0
+        rows.append(counts.tolist())
+        heap.append(y)
+    return rows, heap
+
+
+def test_the_growth_is_attributed_to_the_function_whose_calls_it_follows():
+    """80 bytes per call of the second function: its share is 80 (within a few bytes of page
+    noise), the others' near 0, and the bytes it explains are its share times its calls."""
+    rows, heap = _rotated(40, {1: 80.0})
+    found = attribute(rows, heap)
+    assert found is not None and found.rank == 4
+    assert found.per_unit[1] == pytest.approx(80.0, abs=8.0)
+    assert max(abs(v) for j, v in enumerate(found.per_unit) if j != 1) < 8.0
+    late = np.asarray(rows)[20:]
+    assert found.totals[1] == pytest.approx(found.per_unit[1] * (late[-1, 1] - late[0, 1]))
+
+
+def test_two_leaking_functions_are_told_apart():
+    rows, heap = _rotated(40, {0: 200.0, 3: 64.0}, noise_pages=False)
+    found = attribute(rows, heap)
+    assert found is not None
+    assert found.per_unit == pytest.approx((200.0, 0.0, 0.0, 64.0), abs=1e-6)
+
+
+def test_a_function_never_called_in_the_second_half_explains_nothing():
+    """A column that does not change over the second half cannot be fitted: its share is 0."""
+    rows, heap = _rotated(40, {1: 80.0}, noise_pages=False)
+    rows = [r + [5.0] for r in rows]
+    found = attribute(rows, heap)
+    assert found is not None and found.per_unit[4] == 0.0 and found.rank == 4
+    assert found.per_unit[1] == pytest.approx(80.0, abs=1e-6)
+
+
+def test_too_few_samples_for_the_functions_give_no_attribution():
+    rows, heap = _rotated(MIN_SAMPLES - 1, {1: 80.0})
+    assert attribute(rows, heap) is None
+    rows, heap = _rotated(10, {1: 80.0}, columns=5)   # 5 late samples, 5 columns
+    assert attribute(rows, heap) is None
+    rows, heap = _rotated(14, {1: 80.0}, columns=5)   # 7 late samples: enough
+    assert attribute(rows, heap) is not None

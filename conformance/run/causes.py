@@ -1,9 +1,8 @@
 """One defect, one finding: findings that name a shared cause are folded into one.
 
 A probe or a check names the defect a violation shows (``Violation.cause``: one key, or several)
-where several rules can see one defect: the same derivative entry and deviation in the
-directional and the adjoint derivative, in both modes, in Continuous-Time and Initialization
-Mode; the entries of one unknown or one known that a wrong formula or a wrong partial derivative
+where several rules can see one defect: the same derivative entry in the directional and the
+adjoint derivative, in both modes, in Continuous-Time and Initialization Mode; the entries of one unknown or one known that a wrong formula or a wrong partial derivative
 spoils; what a legacy draft's shape implies for the manifest's header beside the migration that
 names the shape. Violations that share a key are one cause, and so are violations linked through
 others (the components of the graph of shared keys): a wrong formula for an intermediate value

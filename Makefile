@@ -66,7 +66,7 @@ mutation: $(STAMP)
 # own tests, on 2 processes; writes reports/mutation-self/. Incremental: mutmut runs again only
 # the mutants of changed functions (build/mutation-self/). Options through MUTATION_SELF_ARGS,
 # e.g. MUTATION_SELF_ARGS="--packages numerics" or "--sample 200 --seed 1"; exits 1 while a
-# survivor has no verdict in bench/mutation_self_verdicts.toml (docs/mutation-self.md).
+# survivor has no verdict in bench/mutation_self/<package>.toml (docs/mutation-self.md).
 MUTATION_SELF_ARGS ?=
 mutation-self: $(STAMP)
 	$(BIN)/python -m scripts.mutation_self $(MUTATION_SELF_ARGS)

@@ -2,7 +2,7 @@
 
 Each package is mutated on its own, in ``build/mutation-self/<package>/`` (links to the tree and
 a ``pyproject.toml`` holding mutmut's settings for that package), and a mutant is run against
-the package's own tests only (:data:`PACKAGES`); a mutant is killed when a test fails::
+the package's own tests only (``bench/mutation_self/<package>.toml``); a mutant is killed when a test fails::
 
     python -m scripts.mutation_self --packages numerics            # its default sample
     python -m scripts.mutation_self --packages model --sample 300 --seed 1
@@ -13,8 +13,9 @@ the package's own tests only (:data:`PACKAGES`); a mutant is killed when a test 
 mutmut keeps its results in ``mutants/`` of the work folder and runs again only the mutants of
 functions that changed; ``--fresh`` starts over. The report, ``reports/mutation-self/``
 (``summary.md``, ``results.json``), is computed from mutmut's per-mutant results; the verdicts on
-survivors come from ``bench/mutation_self_verdicts.toml``. Exit status 1 while a survivor is
-unexplained (no verdict, or a verdict whose mutated line no longer matches). docs/mutation-self.md.
+survivors and the defect classes they showed come from the same files. Exit status 1 while a
+survivor is unexplained (no verdict, or a verdict whose mutated line no longer matches).
+docs/mutation-self.md.
 """
 from __future__ import annotations
 
@@ -39,7 +40,7 @@ else:  # pragma: no cover
 
 ROOT = Path(__file__).resolve().parents[1]
 WORK = ROOT / "build" / "mutation-self"
-VERDICTS = ROOT / "bench" / "mutation_self_verdicts.toml"
+SETTINGS = ROOT / "bench" / "mutation_self"   # <package>.toml: settings, verdicts, classes
 LINKED = ("conformance", "tests", "scenes", "rules", "schemas", "bench")  # in each work folder
 PYTEST_ARGS = ["-p", "no:xdist", "-p", "no:cacheprovider", "--hypothesis-seed=0"]
 BLAS_THREADS = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
@@ -53,30 +54,29 @@ class Package:
     sample: int | None = None     # mutants run by default (a seeded sample; None: every one)
 
 
-def _whole(name: str) -> Package:
-    return Package((f"conformance/{name}/*",), (f"tests/{name}",))
+class VerdictError(ValueError):
+    """A file of bench/mutation_self/ is malformed."""
 
 
-PACKAGES: dict[str, Package] = {
-    **{name: _whole(name) for name in ("checks", "model", "intake", "report", "reporters",
-                                       "fixes", "run", "commands")},
-    # tests/numerics and the in-process tests of the simulation built on it (about 25 s in all;
-    # the FMU simulations of tests/simulate/test_fmu_simulation.py are left out). About 5,000
-    # mutants at about 1 s each on one process: a sample of 500 takes about 10 minutes.
-    "numerics": Package(("conformance/numerics/*",),
-                        ("tests/numerics", "tests/simulate/test_system.py",
-                         "tests/probes/test_simulation_parts.py",
-                         "tests/checks/test_option_defaults.py"), sample=500),
-    # The pure parts only (no FMU binary, no worker process: mutmut sees only what runs in the
-    # test process). Provisional: not yet run; to be settled by the session that runs them.
-    "probes": Package(("conformance/probes/instruments/sampling.py",
-                       "conformance/probes/instruments/jacobian_layout.py",
-                       "conformance/probes/machinery/lanes.py",
-                       "conformance/probes/machinery/narrowing.py"),
-                      ("tests/probes/test_lanes.py", "tests/probes/test_runner.py")),
-    "simulate": Package(("conformance/simulate/system.py", "conformance/simulate/output.py"),
-                        ("tests/simulate/test_system.py",)),
-}
+def _read(path: Path) -> dict[str, Any]:
+    try:
+        return tomllib.loads(path.read_text(encoding="utf-8"))
+    except tomllib.TOMLDecodeError as exc:
+        raise VerdictError(f"{path}: {exc}") from None
+
+
+def _package(path: Path, table: dict[str, Any]) -> Package:
+    if not table.get("mutate") or not table.get("tests"):
+        raise VerdictError(f"{path}: [package] needs mutate and tests")
+    return Package(tuple(table["mutate"]), tuple(table["tests"]), tuple(table.get("skip", ())),
+                   table.get("sample") or None)
+
+
+def load_packages(folder: Path = SETTINGS) -> dict[str, Package]:
+    """One package per ``<name>.toml`` of the folder, from its ``[package]`` table."""
+    return {path.stem: _package(path, _read(path).get("package", {}))
+            for path in sorted(folder.glob("*.toml"))}
+
 
 # mutmut's status names -> our outcomes; a timeout counts as killed but is shown apart
 OUTCOME = {"killed": "killed", "segfault": "killed", "caught by type check": "killed",
@@ -102,20 +102,20 @@ def config_text(pkg: Package) -> str:
               "do_not_mutate": list(pkg.skip),
               "pytest_add_cli_args_test_selection": list(pkg.tests),
               "pytest_add_cli_args": PYTEST_ARGS, "also_copy": list(LINKED[2:])}
-    lines = ["# written by scripts/mutation_self.py; edit PACKAGES there", "[tool.mutmut]"]
+    lines = ["# written by scripts/mutation_self.py; edit bench/mutation_self/<package>.toml", "[tool.mutmut]"]
     lines += [f"{k} = {_toml(v)}" for k, v in mutmut.items()]
     lines += ["", "[tool.pytest.ini_options]"]
     lines += [f"{k} = {_toml(v)}" for k, v in pytest_opts["ini_options"].items()]
     return "\n".join(lines) + "\n"
 
 
-def prepare(name: str, fresh: bool) -> Path:
+def prepare(name: str, pkg: Package, fresh: bool) -> Path:
     """The package's work folder; its mutants/ goes when mutmut's settings changed (mutmut
     would keep results of the old test selection for functions that did not change) or
     ``fresh``."""
     work = WORK / name
     config = work / "pyproject.toml"
-    text = config_text(PACKAGES[name])
+    text = config_text(pkg)
     if fresh or not config.is_file() or config.read_text() != text:
         shutil.rmtree(work / "mutants", ignore_errors=True)
     work.mkdir(parents=True, exist_ok=True)
@@ -232,28 +232,42 @@ def source_line(module: str, function: str, removed: list[str]) -> int | None:
 
 # ------------------------------------------------------------------ verdicts
 
-class VerdictError(ValueError):
-    """mutation_self_verdicts.toml is malformed."""
+def _check_verdict(path: Path, key: str, entry: dict[str, Any]) -> None:
+    if entry.get("verdict") not in ("equivalent", "open") or "mutated" not in entry:
+        raise VerdictError(f"{path}: {key!r} needs verdict (equivalent or open) and mutated")
+    if entry["verdict"] == "equivalent" and not entry.get("reason"):
+        raise VerdictError(f"{path}: equivalent {key!r} needs a reason")
+    if entry.get("reason", "").startswith("REVIEW"):
+        raise VerdictError(f"{path}: {key!r} is a stub nobody reviewed (reason REVIEW)")
 
 
-def load_verdicts(path: Path = VERDICTS) -> dict[str, dict[str, str]]:
-    """``[verdict."<mutant>"]`` with ``verdict`` (equivalent or open), ``mutated`` (the lines
-    the mutant adds, stripped and joined by `` / ``: the report's *mutated* column) and
-    ``reason`` (required for equivalent)."""
-    if not path.is_file():
-        return {}
-    try:
-        table = tomllib.loads(path.read_text(encoding="utf-8")).get("verdict", {})
-    except tomllib.TOMLDecodeError as exc:
-        raise VerdictError(f"{path}: {exc}") from None
-    for key, entry in table.items():
-        if entry.get("verdict") not in ("equivalent", "open") or "mutated" not in entry:
-            raise VerdictError(f"{path}: {key!r} needs verdict (equivalent or open) and mutated")
-        if entry["verdict"] == "equivalent" and not entry.get("reason"):
-            raise VerdictError(f"{path}: equivalent {key!r} needs a reason")
-        if entry.get("reason", "").startswith("REVIEW"):
-            raise VerdictError(f"{path}: {key!r} is a stub nobody reviewed (reason REVIEW)")
-    return table
+def _check_class(path: Path, key: str, entry: dict[str, Any]) -> None:
+    if not entry.get("title") or not entry.get("mutants") or not entry.get("tests"):
+        raise VerdictError(f"{path}: class {key!r} needs title, mutants and tests")
+
+
+def load_verdicts(folder: Path = SETTINGS) -> tuple[dict[str, dict[str, Any]],
+                                                    dict[str, dict[str, Any]]]:
+    """The verdicts and the defect classes of every package file of the folder.
+
+    ``[verdict."<mutant>"]``: ``verdict`` (equivalent or open), ``mutated`` (the lines the
+    mutant adds, stripped and joined by `` / ``: the report's *mutated* column) and ``reason``
+    (required for equivalent). ``[class.<id>]``: ``title`` (what the tests could not see),
+    ``mutants`` (the survivors that showed it), ``tests`` (the tests that now close it),
+    ``decides`` (what verdict of lsdae's the place decides)."""
+    verdicts: dict[str, dict[str, Any]] = {}
+    classes: dict[str, dict[str, Any]] = {}
+    for path in sorted(folder.glob("*.toml")):
+        data = _read(path)
+        for key, entry in data.get("verdict", {}).items():
+            _check_verdict(path, key, entry)
+            verdicts[key] = entry
+        for key, entry in data.get("class", {}).items():
+            _check_class(path, key, entry)
+            if key in classes:
+                raise VerdictError(f"{path}: class {key!r} is defined twice")
+            classes[key] = {**entry, "package": path.stem}
+    return verdicts, classes
 
 
 def stub(record: dict[str, Any]) -> str:
@@ -327,6 +341,25 @@ def tally(records: list[dict[str, Any]], key: str,
 
 # ------------------------------------------------------------------ the report
 
+def class_rows(classes: dict[str, dict[str, Any]], records: list[dict[str, Any]],
+               packages: Sequence[str]) -> list[dict[str, Any]]:
+    """Each defect class of the packages run, its mutants' outcomes in this report (``not
+    run``: outside the sample) and whether the tests now close it: every one of its mutants
+    that was run is killed."""
+    outcome = {r["name"]: r["outcome"] for r in records}
+    rows = []
+    for key, entry in sorted(classes.items()):
+        if entry["package"] not in packages:
+            continue
+        states = {m: outcome.get(m, "not run") for m in entry["mutants"]}
+        ran = [o for o in states.values() if o != "not run"]
+        rows.append({"class": key, "package": entry["package"], "title": entry["title"],
+                     "decides": entry.get("decides", ""), "tests": list(entry["tests"]),
+                     "mutants": states,
+                     "closed": bool(ran) and all(o in ("killed", "timeout") for o in ran)})
+    return rows
+
+
 def _pct(x: float | None) -> str:
     return "n/a" if x is None else f"{100 * x:.1f} %"
 
@@ -382,6 +415,21 @@ def markdown(data: dict[str, Any]) -> str:
                 f"{_cell(' / '.join(r['removed']))} | {_cell(' / '.join(r['added']))} | "
                 f"{r['reason'].replace('|', '/')} |" for r in group]
         out.append("")
+    classes = data.get("classes", [])
+    if classes:
+        closed = sum(c["closed"] for c in classes)
+        out += [f"## What the tests could not see: defect classes ({closed} of {len(classes)} "
+                "closed)", "", "Each class is a kind of change to a place that decides a "
+                "verdict which survived the tests when the campaign first ran; *closed*: every "
+                "one of its mutants in this run is killed by the tests named.", "",
+                "| class | package | what the tests could not see | decides | mutants | "
+                "closed by | closed |", "|---|---|---|---|---|---|---|"]
+        for c in classes:
+            mutants = "<br>".join(f"`{m.rpartition('.')[2]}`: {o}" for m, o in c["mutants"].items())
+            tests = "<br>".join(_cell(t) for t in c["tests"])
+            out.append(f"| `{c['class']}` | `{c['package']}` | {c['title']} | {c['decides']} | "
+                       f"{mutants} | {tests} | {'yes' if c['closed'] else '**no**'} |")
+        out.append("")
     odd = [r for r in data["mutants"] if r["outcome"] in ("timeout", "other")]
     if odd:
         out += ["## Timeouts and mutants mutmut did not judge", "",
@@ -404,12 +452,12 @@ def _commit() -> str:
 
 # ------------------------------------------------------------------ main
 
-def _args(argv: Sequence[str] | None) -> argparse.Namespace:
+def _args(argv: Sequence[str] | None, names: list[str]) -> argparse.Namespace:
     p = argparse.ArgumentParser(prog="python -m scripts.mutation_self",
                                 description=__doc__.split("\n")[0])
-    p.add_argument("--packages", nargs="+", choices=sorted(PACKAGES), metavar="PACKAGE",
-                   default=sorted(PACKAGES), help="packages to mutate (default: all; "
-                   f"known: {', '.join(sorted(PACKAGES))})")
+    p.add_argument("--packages", nargs="+", choices=names, metavar="PACKAGE",
+                   default=names, help="packages to mutate (default: all; "
+                   f"known: {', '.join(names)})")
     p.add_argument("--sample", type=int, metavar="N",
                    help="run N mutants per package, a seeded random sample; 0: every mutant "
                    "(default: the package's own sample size, see --list)")
@@ -422,7 +470,8 @@ def _args(argv: Sequence[str] | None) -> argparse.Namespace:
     p.add_argument("--report-only", action="store_true",
                    help="run nothing: report mutmut's results as they are (verdicts edited)")
     p.add_argument("--out", type=Path, default=ROOT / "reports" / "mutation-self")
-    p.add_argument("--verdicts", type=Path, default=VERDICTS)
+    p.add_argument("--settings", type=Path, default=SETTINGS,
+                   help="folder of the package files (settings, verdicts, classes)")
     p.add_argument("--stubs", type=Path, metavar="FILE",
                    help="write an entry to review for every unexplained survivor to FILE")
     p.add_argument("--list", action="store_true", help="list the packages and stop")
@@ -430,14 +479,20 @@ def _args(argv: Sequence[str] | None) -> argparse.Namespace:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    args = _args(argv)
+    try:
+        packages_known = load_packages(SETTINGS)
+    except VerdictError as exc:
+        print(f"mutation-self: {exc}", file=sys.stderr)
+        return 2
+    args = _args(argv, sorted(packages_known))
     if args.list:
-        for name, pkg in PACKAGES.items():
+        for name, pkg in packages_known.items():
             print(f"{name:10} mutates {' '.join(pkg.mutate)}; tests {' '.join(pkg.tests)}; "
                   f"sample {pkg.sample or 'all'}")
         return 0
     try:
-        verdicts = load_verdicts(args.verdicts)
+        packages_known = load_packages(args.settings)
+        verdicts, classes = load_verdicts(args.settings)
     except VerdictError as exc:
         print(f"mutation-self: {exc}", file=sys.stderr)
         return 2
@@ -451,9 +506,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         began = time.monotonic()
         work = WORK / name
         if not args.report_only:
-            generate(prepare(name, args.fresh))
+            generate(prepare(name, packages_known[name], args.fresh))
         found = statuses(work)
-        size = PACKAGES[name].sample if args.sample is None else args.sample or None
+        size = packages_known[name].sample if args.sample is None else args.sample or None
         chosen = sample(list(found), size, args.seed, name)
         sizes[name] = size
         pending = [n for n in chosen if found[n][0] is None]
@@ -475,8 +530,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         records += recs
         per_package[name] = len(found)
         per_module.update(module_path(split_name(n)[0]) for n in found)
-        selection[name] = {"mutate": list(PACKAGES[name].mutate),
-                           "tests": list(PACKAGES[name].tests), **last_run,
+        selection[name] = {"mutate": list(packages_known[name].mutate),
+                           "tests": list(packages_known[name].tests), **last_run,
                            "test_seconds": sum(r["seconds"] or 0 for r in recs)}
     seconds = sum(s["seconds"] for s in selection.values())
     mutant_seconds = sum(s["test_seconds"] for s in selection.values())
@@ -498,7 +553,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     data = {"meta": {"table": table, "seconds": seconds, "mutant_seconds": mutant_seconds,
                      "sample": sizes,
                      "seed": args.seed, "selection": selection},
-            "packages": packages, "modules": modules, "mutants": records}
+            "packages": packages, "modules": modules, "mutants": records,
+            "classes": class_rows(classes, records, args.packages)}
     args.out.mkdir(parents=True, exist_ok=True)
     (args.out / "results.json").write_text(json.dumps(data, indent=1, ensure_ascii=False) + "\n")
     (args.out / "summary.md").write_text(markdown(data))

@@ -1,4 +1,6 @@
-"""Every fixture case produces exactly the codes it expects (at warning or error level)."""
+"""Every fixture case produces exactly the codes it expects (at warning or error level), and a
+failing case's findings of its rule are exactly those of its ``[[exact]]`` tables: severity,
+subject, file, line, part and evidence (tests/exactkit.py)."""
 from __future__ import annotations
 
 import pytest
@@ -6,6 +8,7 @@ import pytest
 from conformance.run.engine import EngineOptions, check_fmu
 from conformance.report.findings import Severity
 from tests.fixtures import Case, all_cases, materialise
+from tests.exactkit import assert_exact
 from tests.reportkit import raw_placeholders
 
 CASES = all_cases()
@@ -29,3 +32,17 @@ def test_fixture(case: Case, tmp_path):
         assert case.code not in every, f"{case.id}: the rule fired on its passing case\n{detail}"
     else:
         assert case.code in found, f"{case.id}: the rule did not fire\n{detail}"
+    exact = case.spec.get("exact", [])
+    if case.kind == "fail":
+        assert exact, f"{case.id}: a failing case names its findings exactly ([[exact]])"
+    of_rule = [f for f in report.findings if f.code == case.code]
+    assert len(of_rule) == len(exact), (
+        f"{case.id}: {len(of_rule)} findings of {case.code}, {len(exact)} expected\n{detail}")
+    for table in exact:
+        found = assert_exact(report, code=case.code, severity=table["severity"],
+                             subject=table.get("subject"), file=table.get("file"),
+                             line=table.get("line"), part=table.get("part"),
+                             evidence=table["evidence"])
+        for key in table.get("evidence_none", []):
+            assert found.evidence_dict().get(key, "absent") is None, (
+                f"{case.id}: evidence {key} should be None: {found.evidence_dict()}")

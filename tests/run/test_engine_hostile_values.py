@@ -24,7 +24,9 @@ from lxml import etree
 from conformance.model.description import MODEL_DESCRIPTION
 from conformance.model.manifest import MANIFEST
 from conformance.reporters import json_report
+from conformance.run import engine
 from conformance.run.engine import EngineOptions, check_paths
+from tests.exactkit import assert_exact
 from tests.fixtures import corpus_names, scene_xml
 from tests.reportkit import raw_placeholders
 
@@ -93,6 +95,26 @@ def _check(scene: str, target: str, changes: list[tuple[int, str, str]]) -> None
     assert len(data["fmus"]) == 1 and data["fmus"][0]["rules_run"]
     if not any(t in v for _, _, v in changes for t in TEMPLATES):
         assert raw_placeholders(fmu) == []
+
+
+def test_a_rule_that_fails_on_a_hostile_value_is_an_internal_error_finding(tmp_path,
+                                                                          monkeypatch):
+    """The class of the DAE103 crash, put back on purpose: ``int()`` of a version of 10,000
+    digits raises inside the rule. The check goes on; the failure is one internal-error
+    warning that names the rule and the exception, attached to no file (it is lsdae's)."""
+    def crashing(ctx, **_):
+        int(HUGE)   # ValueError: Python's limit on the digits of an integer string
+        yield  # pragma: no cover
+
+    monkeypatch.setitem(engine.REGISTRY, "DAE103", crashing)
+    root = tmp_path / "fmu"
+    for name, src in scene_xml("SimpleDAE").items():
+        (root / name).parent.mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(src, root / name)
+    fmu = check_paths([root], options=EngineOptions(probes=False)).fmus[0]
+    assert_exact(fmu, code="DAE099", severity="warning", subject=None, file=None, line=None,
+                 evidence={"rule": "DAE103"}, part=None)
+    assert "DAE103" in fmu.rules_run and len(fmu.rules_run) > 1   # the other rules ran
 
 
 SWEEP = [(scene, target) for scene in ("SimpleDAE", "EventDAE")

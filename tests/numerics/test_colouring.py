@@ -191,3 +191,68 @@ def test_wrong_directional_derivative_is_measured_on_its_own():
     pairs = list(zip(e.rows.tolist(), e.cols.tolist()))
     k = pairs.index((3, 4))
     assert e.dd[k] == pytest.approx(2 * e.fd[k], rel=1e-6)
+
+
+def test_without_derivatives_the_random_directions_alone_find_a_hidden_dependency():
+    # no directional derivative to betray it: only the finite differences along the random
+    # directions disagree with what the declared entries predict
+    _, p, c = _measure(12)
+    j = next(j for j in range(12)
+             if c.group[j] in c.group[p.row(0)] and not p.contains(0, j))
+    fun, _, _, x0 = _chain(12, hidden=(0, j))
+    e = measure.measure(measure.Sources(fun), p, c, np.full(12, 1e-5), x0,
+                        np.random.default_rng(0))
+    assert e.localised.tolist() == [0]
+    pairs = list(zip(e.rows.tolist(), e.cols.tolist()))
+    assert e.fd[pairs.index((0, j))] == pytest.approx(x0[j], rel=1e-6)
+    assert np.isnan(e.dd).all() and np.isnan(e.adj).all() and e.dot is None
+
+
+def test_coloured_differences_are_central_by_default_with_boolean_zeros():
+    # f = (x0^2, 3, x1^3) at x = (1, 2): row 1 does not move; central differences of x0^2 are
+    # exact, forward ones would be off by h
+    x = np.array([1.0, 2.0])
+    p = col.Pattern.from_rows(2, [[0], [1], [1]])
+    c = col.colour_columns(p)
+    steps = np.array([1e-3, 1e-3])
+
+    def fun(delta):
+        y = x + delta
+        return np.array([y[0] ** 2, 3.0, y[1] ** 3])
+
+    found = col.coloured_differences(fun, p, c, steps)
+    assert found.zero.dtype == bool and found.zero.tolist() == [False, True, False]
+    assert found.value[0] == pytest.approx(2.0, rel=1e-12)
+    assert found.value[2] == pytest.approx(12.0 + 1e-6, rel=1e-12)   # 3 x^2 + h^2
+    assert found.calls == 4 * c.count and found.moved == []   # f(±h), f(±2h) per group
+
+
+def _entries(**columns) -> measure.Entries:
+    k = len(columns["rows"])
+    base = dict(declared=np.ones(k, dtype=bool), truncation=np.zeros(k), rounding=np.zeros(k),
+                zero=np.zeros(k, dtype=bool), dd=np.full(k, np.nan), adj=np.full(k, np.nan),
+                f0=np.zeros(3), basis=np.zeros(3), localised=np.zeros(0, dtype=np.intp),
+                dot=None, calls=())
+    base.update({name: np.asarray(v) for name, v in columns.items()})
+    return measure.Entries(**base)
+
+
+def test_row_scale_sums_measured_entries_times_the_knowns_nominal():
+    e = _entries(rows=[0, 0, 1], cols=[0, 1, 1], fd=[2.0, -4.0, np.nan], step=[1e-6] * 3,
+                 declared=[True, False, True])
+    nominal = np.array([1.0, 10.0])
+    assert measure.row_scale(e, nominal, 3).tolist() == [42.0, 0.0, 0.0]
+    assert measure.row_scale(e, nominal, 3, declared_only=True).tolist() == [2.0, 0.0, 0.0]
+
+
+def test_floor_of_an_underflowing_row_follows_its_unknowns_nominal_and_the_step():
+    # row 0: every difference below the smallest normal double (underflows); row 1 resolved
+    e = _entries(rows=[0, 0, 1], cols=[0, 1, 1], fd=[0.0, 1e-320, 2.0],
+                 step=[1e-6, 0.5, 1e-3])
+    tiny, eps = np.finfo(float).tiny, np.finfo(float).eps
+    plain = measure.floor(e, 2, ulps=100.0)
+    assert plain.tolist() == [(tiny + 100.0 * eps) / 1e-6, (tiny + 100.0 * eps) / 0.5,
+                              tiny / 1e-3]
+    scaled = measure.floor(e, 2, ulps=100.0, row_nominal=np.array([4.0, 1.0]))
+    assert scaled.tolist() == [(tiny + 100.0 * eps * 4.0) / 1e-6,
+                               (tiny + 100.0 * eps * 4.0) / 0.5, tiny / 1e-3]

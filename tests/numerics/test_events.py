@@ -217,8 +217,42 @@ def test_a_failed_call_in_event_mode_stops_the_run_with_the_call():
 
     with pytest.raises(Stop) as stop:
         event_update(Refuses(), 0.5, np.array([0.3]))
-    assert stop.value.status == st.FMU_FAILED
-    assert stop.value.details["call"] == "fmi3EnterEventMode"
+    assert stop.value.status == st.FMU_FAILED and stop.value.t == 0.5
+    assert stop.value.message == "fmi3EnterEventMode returned fmi3Error at the event at t = 0.5"
+    assert stop.value.details == {"call": "fmi3EnterEventMode", "status": "fmi3Error",
+                                  "log": []}
+
+
+@pytest.mark.parametrize("run", [_dae, _ode], ids=["dae", "ode"])
+def test_a_time_event_only_the_initial_update_announced_is_handled_at_its_time(run):
+    # the boost at t = 0.1 comes before the first state event (t = ln 2 / 2): only the update
+    # at the end of initialisation schedules it
+    system = (Relay if run is _dae else RelayOde)(boost_at=0.1)
+    traj = run(system, rtol=1e-8)
+    assert traj.ok, traj.message
+    assert traj.time_events == 1 and traj.event_times[0] == pytest.approx(0.1, abs=1e-12)
+
+
+class _FailsAfterTheEvent(Relay):
+    """The residuals cannot be evaluated once the relay has switched down (fmi3Error)."""
+
+    def evaluate(self, t, y):
+        if not self.up:
+            raise EvaluationFailed("fmi3GetContinuousStateDerivatives", "fmi3Error",
+                                   ["first", "second"], recoverable=False)
+        return super().evaluate(t, y)
+
+
+def test_a_failed_call_while_restarting_after_an_event_is_an_fmu_failure_with_the_call():
+    traj = _dae(_FailsAfterTheEvent(boost_at=None))
+    first_event = np.log(2) / 2
+    assert traj.status == st.FMU_FAILED and traj.state_events == 1
+    assert traj.event["t"] == pytest.approx(first_event, abs=1e-6)
+    assert {k: v for k, v in traj.event.items() if k not in ("t", "last_step_t")} == {
+        "call": "fmi3GetContinuousStateDerivatives", "status": "fmi3Error",
+        "log": ["first", "second"]}
+    assert traj.message.startswith("fmi3GetContinuousStateDerivatives returned fmi3Error "
+                                   "after the event at t = ")
 
 
 def test_event_log_counts_all_and_lists_the_first_times():

@@ -29,3 +29,11 @@ def test_other_dtypes_and_mixed_signedness_go_to_numpy():
     assert np.array_equal(isin_ints(unsigned, signed), np.isin(unsigned, signed))
     assert np.array_equal(isin_ints(np.arange(4, dtype=np.int32), np.array([3, 9])),
                           [False, False, False, True])
+
+
+def test_a_single_value_or_a_table_of_values_goes_to_numpy():
+    members = np.array([1, 3])
+    assert isin_ints(np.int64(3), members) == np.isin(3, members)
+    assert isin_ints(np.array(2), members).shape == ()
+    table = np.array([[1, 2], [3, 4]])
+    assert isin_ints(table, members).tolist() == [[True, False], [True, False]]

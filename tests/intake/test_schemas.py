@@ -10,7 +10,7 @@ from lxml import etree
 
 from conformance.intake import schema_loader, schemas
 from conformance.model.drafts import detect, migrate
-from conformance.report.findings import Violation
+from conformance.report.findings import Location, Violation, evidence
 from conformance.intake.schema_messages import clean_message
 from tests.fixtures import MANIFESTS
 
@@ -132,6 +132,15 @@ def test_forced_draft_with_another_root() -> None:
     found = manifest_violations(tree, detect.FORMULATION)
     assert len(found) == 1 and found[0].location.line == tree.getroot().sourceline
     assert dict(found[0].evidence)["expected_root"] == "fmiLayeredStandardManifest"
+    assert found[0].message == (
+        "the root element is <fmiDAEManifest>, but the Formulation draft (spring/summer 2026, "
+        "Reference-FMUs) has the root <fmiLayeredStandardManifest>")
+    assert (found[0].subject, found[0].location.path) == ("/fmiDAEManifest", "/fmiDAEManifest")
+    # a legacy root in another namespace: the evidence names the namespace
+    (other,) = manifest_violations(parse_text('<fmi-dae xmlns="urn:other"/>'), detect.ATTRIBUTES_ONLY)
+    assert dict(other.evidence) == {"schema": "fmi-ls-dae-attributes-only.xsd", "root": "fmi-dae",
+                                    "namespace": "urn:other", "expected_root": "fmi-dae"}
+    assert (other.rule, other.part) == ("schema-violation", "legacy-draft-schema")
 
 
 def test_unknown_draft_yields_nothing() -> None:
@@ -200,6 +209,15 @@ def test_model_description_follow_up_errors_are_dropped() -> None:
 def test_model_description_wrong_root() -> None:
     (violation,) = md_violations('<fmiModelDescription xmlns="urn:x" fmiVersion="3.0"/>')
     assert violation.location.line == 1
+    assert violation == Violation(
+        message="the root element is <fmiModelDescription>; an FMI 3.0 modelDescription.xml has "
+                "the root <fmiModelDescription> in no namespace",
+        location=Location(file="modelDescription.xml", line=1, path="/fmiModelDescription"),
+        evidence=evidence(schema="fmi3ModelDescription.xsd"),
+        subject="/fmiModelDescription", rule="schema-violation")
+    (build,) = schemas.validate_build_description(etree.fromstring("<x:b xmlns:x='urn:x'/>"))
+    assert (build.rule, build.subject, build.location.file) == (
+        "build-description-invalid", "/x:b", "sources/buildDescription.xml")
 
 
 def _big_model_description(count: int, bad_at: int | None = None) -> bytes:
@@ -271,8 +289,9 @@ def test_remote_schema_location_is_refused(tmp_path: Path, no_network: list[tupl
             '<xs:schema xmlns:xs="http://www.w3.org/2001/XMLSchema">'
             f'<xs:include schemaLocation="{location}"/><xs:element name="r"/></xs:schema>'
         )
-        with pytest.raises(schema_loader.SchemaLoadError, match="network"):
+        with pytest.raises(schema_loader.SchemaLoadError, match="network") as raised:
             schema_loader._load_schema(xsd)
+        assert f"refused to fetch {location}" in str(raised.value)
     assert no_network == []
 
 
@@ -350,6 +369,9 @@ def test_manifest_errors_carry_the_part_of_their_schema() -> None:
         '<AlgebraicVariable valueReference="5"/>', '<AlgebraicVariable valueReference="-5"/>')
     assert {v.part for v in manifest_violations(parse_text(legacy.split("?>", 1)[1]))} == \
         {"legacy-draft-schema"}
+    assert {dict(v.evidence)["schema"]
+            for v in manifest_violations(parse_text(legacy.split("?>", 1)[1]))} == \
+        {"fmi-ls-dae-formulation.xsd"}
     assert {v.part for v in md_violations(MODEL_DESCRIPTION.replace(
         'causality="local" start="1"', 'causality="nonsense" start="1"'))} == {None}
 
@@ -373,3 +395,21 @@ def test_what_only_lsdaes_stricter_alpha1_schema_rejects_is_a_part(old: str, new
     assert old in text
     found = manifest_violations(parse_text(text.replace(old, new).split("?>", 1)[1]))
     assert [v.part for v in found] == [part]
+
+
+def test_core_schemas_missing_or_fmpy_absent_say_so(tmp_path: Path,
+                                                     monkeypatch: pytest.MonkeyPatch) -> None:
+    import importlib.util
+    from types import SimpleNamespace
+
+    monkeypatch.setattr(importlib.util, "find_spec", lambda name: None)
+    with pytest.raises(schema_loader.SchemaLoadError) as raised:
+        schema_loader.core_schema_dir()
+    assert str(raised.value) == ("fmpy is not installed; lsdae reads the FMI 3.0 core schemas "
+                                 "from it")
+    monkeypatch.setattr(importlib.util, "find_spec",
+                        lambda name: SimpleNamespace(submodule_search_locations=[str(tmp_path)]))
+    with pytest.raises(schema_loader.SchemaLoadError) as raised:
+        schema_loader.core_schema_dir()
+    assert str(raised.value) == ("the FMI 3.0 core schemas are missing from "
+                                 f"{tmp_path / 'schema' / 'fmi3'}")

@@ -94,6 +94,11 @@ def test_billion_laughs(where: str) -> None:
     tree, violations = parse_xml(_laughs(9, where), file="x.xml")
     assert time.perf_counter() - start < 2.0
     assert tree is None and "xml-unsafe-construct" in rules_of(violations)
+    (unsafe,) = [v for v in violations if v.rule == "xml-unsafe-construct"]
+    assert unsafe.location.file == "x.xml" and unsafe.location.line is not None
+    assert dict(unsafe.evidence) == {"libxml2": "ERR_RESOURCE_LIMIT"}
+    if where == "attribute":   # where libxml2 stopped: the root's line (14) and column
+        assert (unsafe.location.line, unsafe.location.column) == (14, 16)
 
 
 def test_xxe_is_never_fetched() -> None:
@@ -103,6 +108,10 @@ def test_xxe_is_never_fetched() -> None:
     assert tree is None and rules_of(violations) == {"xml-unsafe-construct"}
     assert violations[0].location.line == 2
     assert b"root:" not in repr(violations).encode()
+    assert violations[0].message == (
+        "x.xml declares an external entity 'xxe' referring to 'file:///etc/passwd' (XXE); it is "
+        "never fetched, and the document is not used")
+    assert dict(violations[0].evidence) == {"entities": ("xxe",), "external_dtd": None}
 
 
 @pytest.mark.parametrize("doctype", [
@@ -292,3 +301,84 @@ def test_a_missing_declaration_is_a_part() -> None:
     assert [(v.rule, v.part) for v in violations] == [("xml-encoding", "declaration-missing")]
     _, violations = parse_xml(b'<?xml version="1.0" encoding="ISO-8859-1"?><a/>', file="x.xml")
     assert [(v.rule, v.part) for v in violations] == [("xml-encoding", None)]
+
+
+@pytest.mark.parametrize("data, line, column, message, libxml2", [
+    (b"<r>\n<a></b>\n</r>", 2, 8,
+     "x.xml is not well-formed XML: Opening and ending tag mismatch: a line 2 and b",
+     "ERR_TAG_NAME_MISMATCH"),
+    (b"<r>caf\xe9</r>", 1, 7,
+     "x.xml contains bytes that are not valid in its encoding (FMI requires UTF-8; a Latin-1 "
+     "file without an encoding declaration looks like this)", "ERR_INVALID_ENCODING"),
+])
+def test_syntax_errors_exact(data, line, column, message, libxml2) -> None:
+    from conformance.report.findings import Location, Violation
+
+    tree, violations = parse_xml(data, file="x.xml")
+    assert tree is None
+    assert violations == [Violation(message, Location(file="x.xml", line=line, column=column),
+                                    (("libxml2", libxml2),), rule="xml-not-well-formed")]
+
+
+@pytest.mark.parametrize("data", [
+    b"\x00\x00\x00<\x00\x00\x00a\x00\x00\x00/\x00\x00\x00>",   # UTF-32 BE, no BOM
+    b"<\x00\x00\x00a\x00\x00\x00/\x00\x00\x00>\x00\x00\x00",   # UTF-32 LE, no BOM
+])
+def test_utf32_without_bom(data: bytes) -> None:
+    _, violations = parse_xml(data, file="d/x.xml")
+    (encoding,) = [v for v in violations if v.rule == "xml-encoding"]
+    assert encoding.message == "x.xml is encoded as UTF-32; FMI requires UTF-8"
+    assert dict(encoding.evidence) == {"encoding": "UTF-32"}
+
+
+def test_untrusted_text_is_clipped_for_messages() -> None:
+    from conformance.intake.xmlsafe import _clip
+
+    assert _clip("a" * 200) == "a" * 200
+    assert _clip("b" * 201) == "b" * 200 + "..."
+    assert _clip(" x\x1by\n ") == "x y"
+    assert _clip(None) == ""
+
+
+# Paths that this libxml2 does not take on any input found, but others do: the diagnosis is
+# tested on a log entry shaped like theirs.
+
+
+def _entry(type_name: str, message: str, line: int = 3, column: int = 4):
+    from types import SimpleNamespace
+
+    return SimpleNamespace(type_name=type_name, message=message, line=line, column=column)
+
+
+def test_an_io_error_on_a_doctype_is_an_unsafe_external_reference() -> None:
+    from conformance.intake.xmlsafe import _failure_violations
+    from conformance.report.findings import Location, Violation
+
+    found = _failure_violations([_entry("IO_LOAD_ERROR", "failed to load external entity")],
+                                b'<!DOCTYPE r SYSTEM "x.dtd"><r/>', "d/x.xml", [])
+    assert found == [Violation(
+        "refers to an external DTD or entity (failed to load external entity); it is never "
+        "fetched, and the document is not used", Location(file="d/x.xml", line=3, column=4),
+        (("libxml2", "IO_LOAD_ERROR"),), rule="xml-unsafe-construct")]
+    # without a DOCTYPE an I/O error is a plain syntax error
+    (plain,) = _failure_violations([_entry("IO_LOAD_ERROR", "failed")], b"<r/>", "x.xml", [])
+    assert plain.rule == "xml-not-well-formed"
+
+
+def test_invalid_bytes_are_recognised_by_the_message_too() -> None:
+    from conformance.intake.xmlsafe import _syntax_violation
+
+    v = _syntax_violation(_entry("ERR_INVALID_CHAR", "Invalid bytes in character encoding"),
+                          "x.xml", further=2)
+    assert v.message.startswith("contains bytes that are not valid in its encoding")
+    assert dict(v.evidence) == {"libxml2": "ERR_INVALID_CHAR", "further_errors": 2}
+
+
+def test_a_parse_without_a_root_or_an_error_is_not_well_formed(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    from conformance.report.findings import Location, Violation
+
+    monkeypatch.setattr(etree, "fromstring", lambda data, parser: None)
+    assert parse_xml(b"<r/>", file="d/x.xml") == (None, [Violation(
+        "x.xml is not well-formed XML: no root element", Location(file="d/x.xml"),
+        rule="xml-not-well-formed")])

@@ -99,8 +99,12 @@ def test_parse_draft_option(text: str, expected: str) -> None:
 
 @pytest.mark.parametrize("text", ["", "alpha2", "unknown", "legacy"])
 def test_parse_draft_option_rejects(text: str) -> None:
-    with pytest.raises(ValueError):
+    # the message is what `lsdae check --draft` prints: it lists the ids a user may give
+    with pytest.raises(ValueError) as raised:
         detect.parse_draft_option(text)
+    assert str(raised.value) == (
+        f"unknown draft {text!r}; use one of: auto, alpha1, formulation, ls-dae-root, "
+        "flat-index, attributes-only")
 
 
 def test_labels_cover_every_draft() -> None:
@@ -159,8 +163,11 @@ def test_unqualified_shape_b_needs_no_namespace_removal() -> None:
 def test_missing_enable_switch_asks_for_parameter_and_variable() -> None:
     hints = hints_of("formulation-no-enable.xml")
     (enable,) = [h for h in hints if "EnableDAEParameter" in h]
-    assert enable.startswith("add an `<EnableDAEParameter")
-    assert "structuralParameter" in enable and "Boolean" in enable
+    assert enable == (
+        "add an `<EnableDAEParameter valueReference=\"…\"/>` as the root's first child and the "
+        "Boolean structural parameter it points to in modelDescription.xml "
+        "(causality=\"structuralParameter\", variability=\"fixed\" or \"tunable\", "
+        "start=\"false\")")
     # No index in the file, so nothing to drop.
     assert not any("drop `index`" in h for h in hints)
 
@@ -203,7 +210,10 @@ def test_higher_index_residual_is_not_a_rename() -> None:
     root = load("formulation-higher-index.xml")
     hints = migrate.migration_hints(root, detect.FORMULATION)
     (higher,) = [h for h in hints if "higher-index" in h]
-    assert "line 16" in higher and "value references 6, 8" in higher
+    assert higher == (
+        "the `<Residual>` at line 16 has 2 Formulations (value references 6, 8): a higher-index "
+        "constraint, which has no alpha.1 form (alpha.1 covers semi-explicit index-1 DAEs only); "
+        "reduce the model's index so that it is described by index-1 residuals")
     assert not any('valueReference="6"' in h and h.startswith("flatten") for h in hints)
     assert any('valueReference="7"' in h and h.startswith("flatten") for h in hints)
     (violation,) = migrate.legacy_violations(root, detect.FORMULATION, file="m.xml")
@@ -223,6 +233,29 @@ def test_many_residuals_are_summarised() -> None:
     assert len(flatten) == 1 and 'valueReference="100"' in flatten[0]
     (rest,) = [h for h in hints if h.startswith("likewise")]
     assert "other 9" in rest and "101, 102" in rest and "109" in rest
+
+
+def test_three_residuals_are_each_spelled_out() -> None:
+    residuals = "".join(
+        f'<Residual><Formulation valueReference="{100 + i}"/></Residual>' for i in range(3))
+    root = from_text(
+        '<fmiLayeredStandardManifest><EnableDAE valueReference="1"/>'
+        f"<ModelStructure>{residuals}</ModelStructure></fmiLayeredStandardManifest>")
+    hints = migrate.migration_hints(root, detect.FORMULATION)
+    assert [h for h in hints if h.startswith("flatten")] == [
+        f'flatten `<Residual><Formulation valueReference="{100 + i}"/></Residual>` into '
+        f'`<Residual valueReference="{100 + i}"/>`' for i in range(3)]
+    assert not any(h.startswith("likewise") for h in hints)
+
+
+def test_a_nominal_without_value_reference_is_listed_as_unknown() -> None:
+    root = from_text(
+        '<fmiLayeredStandardManifest><EnableDAE valueReference="1"/><AlgebraicVariables>'
+        '<AlgebraicVariable nominal="2"/></AlgebraicVariables></fmiLayeredStandardManifest>')
+    (nominal,) = [h for h in migrate.migration_hints(root, detect.FORMULATION) if "nominal" in h]
+    assert nominal == ('drop `nominal` from AlgebraicVariable (valueReference ?: `nominal="2"`); '
+                       "alpha.1 takes nominal values only from the variables in "
+                       "modelDescription.xml")
 
 
 def test_ls_dae_root_prefix_hints() -> None:
@@ -252,6 +285,15 @@ def test_attributes_only_hints() -> None:
     assert any("<AlgebraicVariables>" in h and "<Residual" in h for h in hints)
 
 
+def test_attributes_only_violation_says_what_is_missing() -> None:
+    root = load("attributes-only.xml")
+    (violation,) = migrate.legacy_violations(root, detect.ATTRIBUTES_ONLY, file="m.xml")
+    assert violation.message.startswith(
+        f"the manifest follows the {detect.DRAFT_LABELS[detect.ATTRIBUTES_ONLY]}, not fmi-ls-dae "
+        "1.0.0-alpha.1; it declares the FMU a DAE-FMU but names no algebraic variables, residuals "
+        "or enable parameter, so an importer has nothing to use. To migrate: ")
+
+
 def test_alpha1_and_unknown_have_no_hints() -> None:
     assert migrate.migration_hints(load("alpha1.xml"), detect.ALPHA1) == ()
     assert migrate.migration_hints(load("unknown-root.xml"), detect.UNKNOWN) == ()
@@ -267,6 +309,14 @@ def test_unrecognised_violation() -> None:
     assert violation.rule == "draft-unrecognised"
     assert violation.location.line == root.sourceline
     assert dict(violation.evidence)["root"] == "daeManifest"
+    assert dict(violation.evidence)["namespace"] == etree.QName(root).namespace
+    assert violation.subject == "daeManifest"
+    other = from_text('<x:fmiDAEManifest xmlns:x="urn:other"/>')
+    (foreign,) = detect.unrecognised_violations(other, file="m.xml")
+    assert dict(foreign.evidence) == {
+        "root": "x:fmiDAEManifest", "namespace": "urn:other",
+        "known_roots": ("fmiDAEManifest", "fmiLayeredStandardManifest", "fmi-ls-dae", "fmi-dae")}
+    assert (foreign.subject, foreign.location.path) == ("x:fmiDAEManifest", "/x:fmiDAEManifest")
     for name, draft in EXPECTED_DRAFT.items():
         if draft != detect.UNKNOWN:
             assert list(detect.unrecognised_violations(load(name), file="m.xml")) == []

@@ -38,6 +38,18 @@ def test_illegal_names_say_where(name, index):
     assert problem is not None and problem.index == index
 
 
+@pytest.mark.parametrize("name, expected", [
+    ("a b", "'.', '[' or the end of the name"),
+    ("'a\\q'", "an escape sequence: \\' \\\" \\? \\\\ \\a \\b \\f \\n \\r \\t \\v"),
+    ("2g", "a letter or '_' starting a name part, or a quoted name '...'"),
+    ("der(x", "'.', '[', ',' and an order, or ')' closing der("),
+    ("''", "at least one character between the quotes"),
+])
+def test_illegal_names_say_what_was_expected(name, expected):
+    # the expectation is the text the structured-name finding shows
+    assert name_problem(name).expected == expected
+
+
 # Text built mostly from the characters the grammar cares about, so that random strings land
 # near the boundary between legal and illegal.
 _ALPHABET = st.sampled_from(list("ab_Z09.[],()'\\ \"?ntder#`é\t") + ["der(", "'a'", "[1]"])

@@ -5,11 +5,16 @@ import os
 import shutil
 import struct
 import subprocess
+import tempfile
 import warnings
 import zipfile
 from pathlib import Path
 
+import pytest
+
 from conformance.commands.fix import fix_fmu
+from conformance.fixes.archive import Package, PackageError
+from conformance.intake.fmu import default_limits
 from conformance.model.manifest import MANIFEST
 from conformance.model.description import MODEL_DESCRIPTION
 from tests.fixes.conftest import STATIC, codes
@@ -126,3 +131,67 @@ def test_entries_written_with_data_descriptors_are_copied_and_readable(tmp_path)
         if old.filename != MANIFEST:
             assert _raw(out, new) == _raw(source, old)
             assert fixed.read(new) == zipfile.ZipFile(source).read(old)
+
+
+# --- the writer on its own: attributes of an edited entry, the temporary sibling -------------
+
+def _zip(path: Path, mode: int = 0o644) -> Path:
+    with zipfile.ZipFile(path, "w") as zf:
+        for name in (MODEL_DESCRIPTION, MANIFEST):
+            info = zipfile.ZipInfo(name, (2022, 1, 1, 0, 0, 0))
+            info.external_attr = (0o100000 | mode) << 16    # a regular file, rw-r--r--
+            zf.writestr(info, b"<old/>\n", zipfile.ZIP_DEFLATED)
+    return path
+
+
+def test_an_edited_entry_keeps_its_mode_time_and_compression(tmp_path):
+    source = _zip(tmp_path / "M.fmu")
+    out = tmp_path / "F.fmu"
+    Package(source, default_limits()).with_files({MANIFEST: b"<new/>\n"}).write(out)
+    old = {i.filename: i for i in zipfile.ZipFile(source).infolist()}
+    for new in zipfile.ZipFile(out).infolist():
+        assert (new.external_attr, new.date_time, new.compress_type) == (
+            old[new.filename].external_attr, (2022, 1, 1, 0, 0, 0), zipfile.ZIP_DEFLATED)
+    assert zipfile.ZipFile(out).read(MANIFEST) == b"<new/>\n"
+
+
+def test_a_zip_is_written_through_a_sibling_not_the_system_temp_folder(tmp_path, monkeypatch):
+    """os.replace cannot move a file across file systems: the temporary file must lie beside
+    the output, whatever TMPDIR says."""
+    source = _zip(tmp_path / "M.fmu")
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path / "no-such-folder"))
+    out = tmp_path / "F.fmu"
+    Package(source, default_limits()).with_files({MANIFEST: b"<new/>\n"}).write(out)
+    assert zipfile.ZipFile(out).read(MANIFEST) == b"<new/>\n"
+
+
+def test_a_failed_write_leaves_nothing_behind_and_says_why(tmp_path):
+    source = _zip(tmp_path / "M.fmu")
+    data = bytearray(source.read_bytes())
+    data[0:4] = b"XXXX"    # the first entry's local header is gone; the directory still names it
+    source.write_bytes(bytes(data))
+    out = tmp_path / "out" / "F.fmu"
+    out.parent.mkdir()
+    with pytest.raises(PackageError, match="no local header where the directory says"):
+        Package(source, default_limits()).with_files({MANIFEST: b"<new/>\n"}).write(out)
+    assert list(out.parent.iterdir()) == []
+
+
+def test_a_folder_is_built_in_a_hidden_sibling_then_moved(tmp_path, monkeypatch):
+    source = tmp_path / "in"
+    (source / "extra").mkdir(parents=True)
+    (source / MODEL_DESCRIPTION).write_bytes(b"<old/>\n")
+    copies = []
+    real = shutil.copytree
+
+    def copytree(src, dst, *args, **kw):   # shutil calls itself for subfolders
+        copies.append(Path(dst))
+        return real(src, dst, *args, **kw)
+
+    monkeypatch.setattr(shutil, "copytree", copytree)
+    out = tmp_path / "out"
+    Package(source, default_limits()).with_files({MODEL_DESCRIPTION: b"<new/>\n"}).write(out)
+    assert (out / MODEL_DESCRIPTION).read_bytes() == b"<new/>\n"
+    assert (source / MODEL_DESCRIPTION).read_bytes() == b"<old/>\n"
+    assert copies[0].parent == tmp_path
+    assert copies[0].name.startswith(".lsdae-fix-") and not copies[0].exists()

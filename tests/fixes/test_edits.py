@@ -6,7 +6,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from conformance.fixes.edits import Edit, EditConflict, apply_edits
-from conformance.fixes.xmltext import root_start_tag
+from conformance.fixes.xmltext import ascii_compatible, element_tree, escape, root_start_tag
 
 
 def test_edits_apply_in_offset_order_whatever_order_given():
@@ -52,3 +52,30 @@ def test_root_start_tag_skips_the_prolog_and_reads_attributes_in_place():
 
 def test_root_start_tag_gives_up_on_wide_encodings():
     assert root_start_tag('<root a="1"/>'.encode("utf-16")) is None
+
+
+@pytest.mark.parametrize("data", [b"<a><b/>", b"<a><b></a>", b"<a/><b/>", b"text only"])
+def test_element_tree_gives_up_on_what_it_cannot_read_exactly(data):
+    assert element_tree(data) is None
+
+
+def test_element_tree_spans():
+    data = b'<?xml version="1.0"?>\n<a x="1">\n  <b/>\n  <!-- <c> -->\n  <d>t</d>\n</a>\n'
+    root = element_tree(data)
+    assert [c.name for c in root.children] == ["b", "d"]
+    b, d = root.children
+    assert data[b.tag.start:b.end] == b"<b/>" and b.end_tag_start is None
+    assert data[d.tag.start:d.end] == b"<d>t</d>" and data[d.end_tag_start:d.end] == b"</d>"
+    assert data[root.end_tag_start:root.end] == b"</a>"
+
+
+def test_escape_for_the_quote_the_value_sits_in():
+    assert escape("a&b<c\"d'e") == b"a&amp;b&lt;c&quot;d'e"
+    assert escape("a&b<c\"d'e", b'"') == b"a&amp;b&lt;c&quot;d'e"
+    assert escape("a&b<c\"d'e", b"'") == b"a&amp;b&lt;c\"d&apos;e"
+
+
+def test_a_wide_encoding_is_recognised_by_a_nul_in_the_first_200_bytes():
+    assert not ascii_compatible(b"<" + b" " * 198 + b"\x00")      # byte 199
+    assert ascii_compatible(b"<" + b" " * 199 + b"\x00")          # byte 200: not looked at
+    assert not ascii_compatible(b"\xff\xfe<\x00") and not ascii_compatible(b"\xfe\xff\x00<")

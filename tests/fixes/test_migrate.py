@@ -9,10 +9,11 @@ from hypothesis import strategies as st
 from conformance.model.drafts.detect import ALPHA1, LEGACY_DRAFTS, LS_NAMESPACE, detect_draft
 from conformance.fixes.change import NoFix
 from conformance.fixes.edits import apply_edits
-from conformance.fixes.migrate import _Migration
+from conformance.fixes.migrate import _Migration, migrate_manifest
 from conformance.model.manifest import MANIFEST, read_manifest
 from conformance.intake.schemas import validate_manifest
 from conformance.intake.xmlsafe import parse_xml
+from conformance.report.findings import Finding, Location, Severity, evidence
 from tests.fixtures import MANIFESTS, scene_xml
 
 DATA = MANIFESTS
@@ -137,3 +138,60 @@ def test_generated_legacy_manifests_migrate_to_valid_alpha1_with_the_same_meanin
     _assert_migrated(data, after)
     assert [e.vr for e in _read(after)[2].enables] == \
         ([1] if b"EnableDAE " in data or b"enableDAEModeVariable" in data else [])
+
+
+# --- the exact bytes of a migration, and the reasons given when there is none ----------------
+
+HEADER = (f'xmlns:fmi-ls="{LS_NAMESPACE}" fmi-ls:fmi-ls-name="org.fmi-standard.fmi-ls-dae" '
+          'fmi-ls:fmi-ls-version="{version}" '
+          'fmi-ls:fmi-ls-description="Layered standard for DAE support in FMI."')
+
+
+def _flat(root_attributes: str, children: str) -> bytes:
+    return (f'<fmiLayeredStandardManifest {HEADER.format(version="0.1")}{root_attributes}>'
+            f"{children}</fmiLayeredStandardManifest>\n").encode()
+
+
+def _edit(data: bytes, draft: str = "flat-index") -> bytes:
+    return apply_edits(data, _Migration(MANIFEST, data, draft, MODEL).run())
+
+
+def test_migration_writes_exactly_the_alpha1_text_and_keeps_the_rest():
+    data = _flat(' enableDAEModeVariable="1"',
+                 '<AlgebraicVariables>\n    <AlgebraicVariable valueReference="4"/>\n'
+                 "  </AlgebraicVariables>\n  <ModelStructure>\n"
+                 '    <Residual valueReference="7" index="1"/>\n'
+                 '    <Output valueReference="4"/>\n  </ModelStructure>\n')
+    # the enable parameter goes before the first child, on the root's line: no indentation
+    assert _edit(data).decode() == (
+        f'<fmiDAEManifest {HEADER.format(version="1.0.0-alpha.1")}>'
+        '<EnableDAEParameter valueReference="1"/>\n<AlgebraicVariables>\n'
+        '    <AlgebraicVariable valueReference="4"/>\n  </AlgebraicVariables>\n'
+        "  <ModelStructure>\n"
+        '    <Output valueReference="4"/>\n'
+        '    <Residual valueReference="7"/>\n'
+        "  </ModelStructure>\n</fmiDAEManifest>\n")
+
+
+@pytest.mark.parametrize("children, reason", [
+    ('<AlgebraicVariables/><EnableDAE valueReference="1"/>',
+     "<EnableDAE> is not the root's first child"),
+    ('<ModelStructure><Output valueReference="1"/><Other/></ModelStructure>',
+     "<ModelStructure> holds an element alpha.1 does not know"),
+])
+def test_what_has_no_alpha1_form_says_why(children, reason):
+    with pytest.raises(NoFix) as raised:
+        _edit(_flat("", children))
+    assert str(raised.value) == reason
+
+
+def test_a_manifest_that_cannot_be_read_is_no_fix():
+    class _Nothing:
+        def read(self, name: str) -> None:
+            return None
+
+    finding = Finding("DAE021", "legacy-draft-shape", Severity.WARNING, "m",
+                      Location(file=MANIFEST), evidence(draft="formulation"), "formulation")
+    with pytest.raises(NoFix) as raised:
+        migrate_manifest(_Nothing(), [finding])
+    assert str(raised.value) == f"{MANIFEST} cannot be read"

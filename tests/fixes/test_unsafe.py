@@ -190,3 +190,20 @@ def test_every_false_constant_kind_is_repaired_and_the_result_is_a_fixpoint(
         binaries = [n for n in a.namelist() if n.startswith("binaries/")]
         assert binaries and all(a.read(n) == b.read(n) for n in binaries)
     assert not fix_fmu(out, options=DYNAMIC, unsafe=True).package.modified
+
+
+def test_find_path_reads_indices_of_more_than_one_digit():
+    residuals = "".join(f'<Residual valueReference="{vr}"/>' for vr in range(100, 112))
+    root = element_tree(f"<m><ModelStructure>{residuals}</ModelStructure></m>".encode())
+    assert find_path(root, "/m/ModelStructure/Residual[10]").tag.attribute(
+        "valueReference").value == "109"
+    assert find_path(root, "/m/ModelStructure/Residual[12]").tag.attribute(
+        "valueReference").value == "111"
+
+
+def test_an_observed_kind_keeps_the_attribute_quote_and_the_other_tokens_as_written():
+    doc = (b"<m>\n <ModelStructure>\n  <Residual valueReference='6' dependencies='1 4' "
+           b"dependenciesKind='constant x\"y'/>\n </ModelStructure>\n</m>\n")
+    change = observed_kinds(_Files(doc), [_finding("DAE744", 1,
+                                                   "/m/ModelStructure/Residual[1]")])
+    assert apply_edits(doc, change.edits) == doc.replace(b"'constant x", b"'dependent x")

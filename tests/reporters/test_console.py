@@ -8,7 +8,8 @@ import pytest
 
 from conformance.report.catalogue import default_catalogue
 from conformance.run.engine import EngineOptions, check_paths
-from conformance.report.findings import Finding, FmuReport, Location, Report, evidence
+from conformance.report.findings import (Finding, FmuReport, Location, Report, Severity,
+                                         evidence)
 from conformance.reporters.console import EVIDENCE_ITEMS, render
 from tests.reporters.samples import SAMPLE_CATALOGUE, sample_report
 from tests.scenes.test_corpus import corpus_fmu
@@ -81,3 +82,33 @@ def test_manifest_missing_names_what_declares_the_layer(tmp_path):
     text = render(check_paths([fmu], options=EngineOptions(probes=False)))
     assert ("although extra/org.fmi-standard.fmi-ls-dae/README.txt declares the fmi-ls-dae "
             "layer") in text
+
+
+# --- exact lines: the summary a user reads, and the evidence values as printed -------------
+
+def test_evidence_values_nested_in_lists_and_long_values_are_cut():
+    text = render(_report(_finding("directional-derivative-mismatch",
+                                   points=[{"t": 0.5, "x": 1}, [1, 2]], long="x" * 150)),
+                  CATALOGUE)
+    assert "      points: [(t=0.5, x=1), [1, 2]]\n" in text
+    assert f"      long: {'x' * 99}…\n" in text
+
+
+def test_summary_lines_name_the_draft_counts_and_unchecked_binaries():
+    warning = Finding("DAE021", "legacy-draft-shape", Severity.WARNING, "w", Location())
+    probed = FmuReport(path="a.fmu", draft=None, findings=(warning,),
+                       info=evidence(manifest="0.1"))
+    unprobed = FmuReport(path="b.fmu", draft="alpha1", findings=(),
+                         info=evidence(probes="not run: no binary"))
+    plain = FmuReport(path="c.fmu", draft=None, findings=())
+    lines = render(Report("0", (probed, unprobed, plain))).splitlines()
+    assert "a.fmu: fmi-ls-dae manifest 0.1; 0 errors, 1 warning, 0 info" in lines
+    assert "c.fmu: no fmi-ls-dae manifest; 0 errors, 0 warnings, 0 info" in lines
+    assert lines[-1] == ("checked 3 FMUs: 0 errors, 1 warning; "
+                         "the binary of 1 FMU was not checked")
+
+
+def test_an_interrupted_run_names_the_first_fmus_not_checked():
+    report = Report("0", (), not_checked=("a.fmu", "b.fmu", "c.fmu", "d.fmu"))
+    assert render(report).splitlines()[-1] == \
+        "interrupted: 4 FMUs not checked (a.fmu, b.fmu, c.fmu, …)"

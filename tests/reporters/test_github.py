@@ -162,3 +162,24 @@ def test_escaping_round_trips(message, prop):
     commands, _ = parse(github.command("warning", message, file=prop, title="t"))
     assert len(commands) == 1
     assert commands[0].message == message and commands[0].properties["file"] == prop
+
+
+def test_pointer_and_hidden_group_say_exactly_what_was_left_out():
+    commands, _ = parse(_render(_many(12, 0, 1), environ={}))
+    group = next(c for c in commands if c.kind == "group")
+    assert group.message == "lsdae: 2 more findings (not annotated)"
+    pointer = commands[-1]
+    assert pointer.properties == {"title": "lsdae: more findings"}
+    assert pointer.message == (
+        "lsdae found 12 errors, 0 warnings, 1 info in 1 FMU; GitHub shows 10 annotations of "
+        "each kind per step, so 2 are only in the log group above. See the full report: run "
+        "lsdae with --format json:FILE or --format markdown:FILE")
+
+
+def test_the_run_page_comes_from_the_process_environment_by_default(monkeypatch):
+    for key, value in ENV.items():
+        monkeypatch.setenv(key, value)
+    output = github.render(_many(11, 0, 0), SAMPLE_CATALOGUE)
+    pointer = parse(output)[0][-1]
+    assert pointer.message.endswith(
+        "See the full report: https://github.com/acme/fmus/actions/runs/42")

@@ -6,16 +6,18 @@ import os
 import re
 import shutil
 import subprocess
+from html import escape
 from html.parser import HTMLParser
 from pathlib import Path
 
 import pytest
 
+from conformance.model.drafts.names import DRAFT_LABELS
 from conformance.report.catalogue import default_catalogue
 from conformance.report.findings import (Finding, FmuReport, Location, Report, RunInfo, Severity,
                                         evidence)
 from conformance.reporters import REPORTER_BY_NAME
-from conformance.reporters.html import render
+from conformance.reporters.html import _verdict, render
 
 CATALOGUE = default_catalogue()
 
@@ -264,3 +266,43 @@ def test_each_finding_shows_the_basis_its_severity_rests_on():
                   run=RunInfo())
     assert escape(f"{rule.basis.describe()} ({rule.severity})") in page
     assert escape(f"{part.describe()} ({part.severity})") in page
+
+
+# --- field by field: the verdict, the tables' headings, each finding's severity -------------
+
+def _counts(error=0, warning=0, info=0, baselined=0) -> dict[str, int]:
+    return {"error": error, "warning": warning, "info": info, "baselined": baselined}
+
+
+def test_verdict_texts_and_classes():
+    assert _verdict(_counts()) == ("Conformant: no errors or warnings", "pass")
+    assert _verdict(_counts(info=3, baselined=2)) == (
+        "Conformant: no errors or warnings (2 more accepted by the baseline)", "pass")
+    assert _verdict(_counts(warning=1)) == ("Conformant, with 1 warning", "warn")
+    assert _verdict(_counts(warning=2, baselined=1)) == (
+        "Conformant, with 2 warnings (1 more accepted by the baseline)", "warn")
+    assert _verdict(_counts(error=2, warning=1)) == ("Not conformant: 2 errors, 1 warning",
+                                                     "fail")
+
+
+def test_fmu_sections_name_their_facts_headings_findings_and_rules():
+    page = render(sample_report(), CATALOGUE)
+    assert ("<tr><th>FMU</th><th>draft</th><th>errors</th><th>warnings</th><th>infos</th>"
+            "<th>baselined</th><th>verdict</th></tr>") in page
+    first = page[page.index('id="fmu-1"'):page.index('id="fmu-2"')]
+    second = page[page.index('id="fmu-2"'):]
+    label = escape(DRAFT_LABELS["alpha1"])
+    assert (f'<p class="meta">draft: {label} · model name: Broken · fmi version: 3.0 · '
+            "variables: 9</p>") in first
+    assert [line for line in first.splitlines() if "<h3>" in line] == [
+        "<h3>Findings (3)</h3>", "<h3>DAE Jacobian: declared versus observed sparsity</h3>",
+        "<h3>Probe errors against tolerance</h3>"]
+    assert re.findall(r'<article class="([^"]*)">', first) == [
+        "finding error", "finding warning baselined", "finding info"]
+    assert ('<div class="head"><span class="badge error">error</span> <code>DAE203</code> '
+            "enable-parameter-not-boolean</div>") in first
+    assert ("<details><summary>Rules run (1) and skipped (0)</summary>"
+            "<p><code>DAE203</code></p></details>\n</section>") in first
+    assert ("<details><summary>Rules run (0) and skipped (1)</summary><p><code>none</code></p>"
+            "<table><tr><th>rule</th><th>reason</th></tr><tr><td><code>DAE701</code></td>"
+            "<td>probes turned off (--no-probes)</td></tr></table></details>") in second

@@ -153,3 +153,17 @@ def test_only_time_and_timestamp_depend_on_the_run():
 
     assert a != b and strip(a) == strip(b)
     assert junit.render(report, SAMPLE_CATALOGUE, run=SAMPLE_RUN) == a
+
+
+@pytest.mark.parametrize("stamp, want", [
+    ("2026-11-21T22:28:40Z", "2026-11-21T22:28:40"),
+    ("2026-11-21T23:28:40.750+01:00", "2026-11-21T22:28:40"),
+    ("2026-11-21T22:28:40", "2026-11-21T22:28:40"),
+    ("yesterday", "1970-01-01T00:00:00"),
+    (None, "1970-01-01T00:00:00"),
+])
+def test_timestamps_are_utc_without_a_zone(stamp, want):
+    root = etree.fromstring(junit.render(sample_report(), SAMPLE_CATALOGUE,
+                                         run=RunInfo(stamp, "h", ())).encode())
+    assert root.get("timestamp") == want
+    assert {s.get("timestamp") for s in root.iter("testsuite")} == {want}

@@ -116,3 +116,19 @@ def test_backtick_quotes_in_messages_become_code_spans():
     assert markdown.message("rename `<A>` to `<B|C>` now") == "rename `<A>` to `<B|C>` now"
     assert markdown.message("one ` tick <x>") == "one \\` tick &lt;x&gt;"
     assert markdown.message("a\n`b`\r\nc") == "a `b` c"
+
+
+def test_text_escapes_html_entities_and_blank_quotes_stay_text():
+    assert markdown.text("R&D <x>") == "R&amp;D &lt;x&gt;"
+    assert markdown.message("a ` ` b") == "a \\` \\` b"
+
+
+def test_the_budget_is_a_byte_limit_on_the_whole_summary():
+    report = Report("9.9.9", (sample_report().fmus[0],))
+    full = markdown.render(report, budget=10**9)
+    footer = len("<sub>lsdae 9.9.9</sub>\n".encode())
+    exact = len(full.encode()) - footer
+    assert markdown.render(report, budget=exact) == full
+    cut = markdown.render(report, budget=exact - 1)
+    # one byte short: the FMU's block no longer fits whole; its findings are kept one by one
+    assert "Skipped rules" in full and "Skipped rules" not in cut

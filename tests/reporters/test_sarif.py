@@ -15,6 +15,7 @@ from tests.reporters.samples import (
     MANIFEST,
     SAMPLE_CATALOGUE,
     compare_expected,
+    docs_file,
     engine_catalogue,
     sample_report,
 )
@@ -163,7 +164,7 @@ def test_rule_help_shows_the_basis_of_the_rule_and_of_each_part():
 
 
 def test_docs_anchor_matches_the_generated_rule_docs():
-    docs = (Path(__file__).resolve().parents[2] / "docs" / "rules.md").read_text("utf-8")
+    docs = docs_file("rules.md").read_text("utf-8")
     rule = default_catalogue()["DAE203"]
     anchor = sarif.rule_url(rule.code, rule.name).split("#", 1)[1]
     assert f"](#{anchor})" in docs  # the docs' own table of contents links the same anchor
@@ -275,3 +276,12 @@ def test_deterministic():
     assert sarif.render(sample_report(), SAMPLE_CATALOGUE) == sarif.render(sample_report(),
                                                                            SAMPLE_CATALOGUE)
     assert MANIFEST in sarif.render(sample_report(), SAMPLE_CATALOGUE)
+
+
+def test_an_interrupted_run_is_an_error_notification_per_fmu_not_checked():
+    report = replace(sample_report(), not_checked=("models/Later.fmu",))
+    invocation = _log(report)["runs"][0]["invocations"][0]
+    assert invocation["executionSuccessful"] is False
+    assert invocation["toolExecutionNotifications"][-1] == {
+        "level": "error", "message": {"text": "models/Later.fmu: not checked, the run was "
+                                              "interrupted"}}

@@ -70,3 +70,95 @@ def test_non_finite_evidence_comes_back_as_floats():
 def test_the_reader_refuses_what_is_not_a_report(data):
     with pytest.raises(ReportFormatError):
         read_report(data)
+
+
+def _fmu_data(**changes):
+    fmu = {"path": "a", "draft": "alpha1", "info": {}, "rules_run": ["DAE101"],
+           "rules_skipped": [{"code": "DAE2", "reason": "r"}],
+           "rules_not_run": [{"code": "DAE3", "reason": "budget"}],
+           "findings": [{"code": "DAE1", "name": "n", "severity": "warning", "message": "m",
+                         "file": "f.xml", "line": 3, "column": 4, "path": "/a",
+                         "subject": "s", "count": 2, "part": "p"}]}
+    fmu.update(changes)
+    return fmu
+
+
+def _data(**changes):
+    data = {"tool": "lsdae", "version": "0.1", "schema_version": SCHEMA_VERSION,
+            "options": {"seed": 1}, "fmus": [_fmu_data()],
+            "interrupted": {"not_checked": ["b", "c"]}}
+    data.update(changes)
+    return data
+
+
+def test_every_field_of_a_report_is_read_back():
+    from conformance.report.findings import Finding, FmuReport, Location, Report, Severity
+
+    report = read_report(_data())
+    assert report == Report(
+        tool_version="0.1", options=(("seed", 1),), not_checked=("b", "c"), fmus=(FmuReport(
+            path="a", draft="alpha1", rules_run=("DAE101",), rules_skipped=(("DAE2", "r"),),
+            rules_not_run=(("DAE3", "budget"),), findings=(Finding(
+                code="DAE1", name="n", severity=Severity.WARNING, message="m",
+                location=Location(file="f.xml", line=3, column=4, path="/a"), subject="s",
+                count=2, part="p"),)),))
+    plain = read_report(_data(interrupted=None))
+    assert plain.not_checked == () and not plain.interrupted
+    old = dict(_fmu_data())
+    del old["rules_not_run"]
+    old["findings"][0]["part"] = None
+    del old["info"]
+    fmu = read_report(_data(fmus=[old], options=None)).fmus[0]
+    assert fmu.rules_not_run == () and fmu.findings[0].part is None and fmu.info == ()
+    assert read_report(_data(options=None)).options == ()
+
+
+@pytest.mark.parametrize("changes, says", [
+    ({"fmus": {}}, "fmus is not a list"),
+    ({"fmus": [3]}, "fmus[] is not an object"),
+    ({"version": 1}, "version is not a string"),
+    ({"options": [1]}, "options is not an object"),
+    ({"shard": [1]}, "shard is not an object"),
+    ({"interrupted": {"not_checked": "b"}}, "not_checked is not a list"),
+    ({"interrupted": {"not_checked": [1]}}, "not_checked is not a string"),
+    ({"fmus": [_fmu_data(path=1)]}, "path is not a string"),
+    ({"fmus": [_fmu_data(findings={})]}, "findings is not a list"),
+    ({"fmus": [_fmu_data(findings=[1])]}, "findings[] is not an object"),
+    ({"fmus": [_fmu_data(rules_run={})]}, "rules_run is not a list"),
+    ({"fmus": [_fmu_data(rules_run=[1])]}, "rules_run is not a string"),
+    ({"fmus": [_fmu_data(rules_skipped={})]}, "rules_skipped is not a list"),
+    ({"fmus": [_fmu_data(rules_skipped=[{"code": 1, "reason": "r"}])]},
+     "rules_skipped is not a string"),
+    ({"fmus": [_fmu_data(rules_not_run=[{"code": "X", "reason": 2}])]},
+     "rules_not_run is not a string"),
+    ({"fmus": [_fmu_data(info=[1])]}, "info is not an object"),
+])
+def test_what_is_wrong_in_a_report_is_named(changes, says):
+    with pytest.raises(ReportFormatError) as caught:
+        read_report(_data(**changes))
+    assert str(caught.value) == f"not an lsdae JSON report: {says}"
+
+
+@pytest.mark.parametrize("key, value", [("code", 1), ("name", 1), ("severity", 1),
+                                        ("message", 1), ("part", 1), ("evidence", [1])])
+def test_what_is_wrong_in_a_finding_is_named(key, value):
+    fmu = _fmu_data()
+    fmu["findings"][0][key] = value
+    with pytest.raises(ReportFormatError) as caught:
+        read_report(_data(fmus=[fmu]))
+    assert str(caught.value) == (f"not an lsdae JSON report: {key} is not "
+                                 f"{'an object' if key == 'evidence' else 'a string'}")
+
+
+def test_a_missing_field_is_named_with_its_error():
+    fmu = _fmu_data()
+    del fmu["findings"][0]["subject"]
+    with pytest.raises(ReportFormatError) as caught:
+        read_report(_data(fmus=[fmu]))
+    assert str(caught.value) == "not an lsdae JSON report: KeyError: 'subject'"
+    with pytest.raises(ReportFormatError) as caught:
+        read_report({"tool": "lsdae", "schema_version": 3})
+    assert str(caught.value) == "JSON report schema version 3; this lsdae reads version 1"
+    with pytest.raises(ReportFormatError) as caught:
+        read_report({"TOOL": "lsdae"})
+    assert str(caught.value) == 'not an lsdae JSON report (no "tool": "lsdae")'

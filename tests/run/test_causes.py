@@ -71,3 +71,62 @@ def test_a_limit_of_lsdae_says_so_and_how_to_raise_it():
                              f"verdict on the FMU: {CATALOGUE['DAE702'].basis.word})")
     assert "--rule-option DAE702.probe_seconds" in limit.message
     assert verdict.message == "'d(a)/d(b)' is wrong"
+
+
+def test_every_folded_place_is_kept_up_to_a_limit_and_the_rest_counted():
+    """Up to ALSO_KEPT places in the evidence, each with its rule, place and message; the
+    message names the first PLACES_SHOWN and how many more."""
+    from conformance.run.causes import ALSO_KEPT, PLACES_SHOWN
+
+    items = [(CATALOGUE["DAE740"], _v(f"p{k:03d}", "c")) for k in range(ALSO_KEPT + 3)]
+    ((rule, v),) = fold_causes(items, _severity)
+    assert (PLACES_SHOWN, ALSO_KEPT) == (5, 200)
+    assert v.text == ("'d(a)/d(b)' is wrong in p000; the same defect in 202 more places: "
+                      "p001; p002; p003; p004; p005; and 197 more")
+    ev = dict(v.evidence)
+    also = thaw(ev["also"])
+    assert len(also) == ALSO_KEPT and ev["also_left_out"] == 2
+    assert also[0] == {"rule": "DAE740", "where": "p001",
+                       "message": "'d(a)/d(b)' is wrong in p001"}
+    assert also[-1]["where"] == "p200"
+    assert ev["place"] == "p000"
+    six = fold_causes(items[:6], _severity)
+    assert six[0][1].text.endswith("p001; p002; p003; p004; p005")
+    assert "also_left_out" not in dict(six[0][1].evidence)
+
+
+def test_a_place_is_named_by_subject_element_path_or_file():
+    """A folded violation with no place of its own is named by its subject, else its element
+    path, else its file; one seen elsewhere about another subject by both."""
+    from conformance.report.findings import Location
+    from conformance.run.causes import label, where
+
+    assert where(Violation("m", Location(file="f.xml", path="/a/b"), subject="s")) == "'s'"
+    assert where(Violation("m", Location(file="f.xml", path="/a/b"))) == "/a/b"
+    assert where(Violation("m", Location(file="f.xml"))) == "f.xml"
+    assert where(Violation("m")) == ""
+    owner = _v("dae", "c", "d(a)/d(b)")
+    assert label(_v("ode", "c", "d(a)/d(b)"), owner) == "ode"
+    assert label(_v("ode", "c", "d(x)/d(b)"), owner) == "'d(x)/d(b)', ode"
+    assert label(Violation("m", Location(file="f.xml")), owner) == "f.xml"
+
+
+def test_the_first_cause_and_the_narrowest_call_keep_a_group():
+    """Among equal severities: a rule of FIRST before the others whatever its code, then the
+    code, then the call that named the fewest variables, then the place."""
+    from conformance.run.causes import FIRST, _breadth, _rank
+
+    failed, other = CATALOGUE["evaluation-failed"], CATALOGUE["DAE722"]
+    assert _rank(failed) == FIRST.index("evaluation-failed") and _rank(other) == len(FIRST)
+    assert failed.severity == other.severity
+    assert failed.code > other.code          # the rank, not the code, puts it first
+    kept = fold_causes([(other, _v("a", "c")), (failed, _v("b", "c"))], _severity)
+    assert [(r.name, dict(v.evidence)["place"]) for r, v in kept] == [("evaluation-failed", "b")]
+
+    def call(place: str, n) -> Violation:
+        return Violation("crash", evidence=evidence(place=place, value_reference_count=n),
+                         cause="c")
+    assert [_breadth(call("x", n)) for n in (3, None, "2")] == [3, 0, 0]
+    kept = fold_causes([(failed, call("a", 4)), (failed, call("b", 1)), (failed, call("c", 2))],
+                       _severity)
+    assert [dict(v.evidence)["place"] for _, v in kept] == ["b"]

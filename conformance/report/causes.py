@@ -8,7 +8,9 @@ Two violations that name one key are one defect (``conformance.run.causes`` fold
   FMU does not let an importer set or read;
 * :func:`failing` -- the FMU fails to evaluate in one state of one mode: the call that stops
   its run, and the reads refused there, are one defect;
-* :data:`STALE` -- values read after a setter moved the point are the previous point's.
+* :data:`STALE` -- values read after a setter moved the point are the previous point's;
+* :data:`FAULT` -- one fault of the FMU's that several modes, instants or probes show alike (a
+  nominal it gives wrong, a flag it sets wrongly, a call it refuses, a limit it exhausts).
 """
 from __future__ import annotations
 
@@ -32,3 +34,12 @@ def failing(state: str, mode: str) -> str:
     """The cause 'the FMU fails to evaluate in ``state``, ``mode``' (e.g. 'Initialization
     Mode', 'ODE mode')."""
     return f"evaluation fails in {state}, {mode}"
+
+
+#: The cause 'the FMU does what the text rules out', whichever mode, instant or probe shows it
+#: (one code path of the binary, one finding): ``FAULT.format("refuses a stop time")``.
+FAULT = "the FMU {}"
+
+#: The cause 'a defined nextEventTime at or before the time it is announced at', whether the
+#: walk of fixed event instants or a simulation's run meets it.
+NEXT_EVENT_NOT_AHEAD = FAULT.format("announces a nextEventTime that is not ahead")

@@ -144,16 +144,20 @@ def test_exact_binary_timed_out():
 
 def test_exact_binary_memory_limit():
     # fmi3GetContinuousStateDerivatives allocates 64 MiB blocks until malloc fails, then
-    # aborts: under the default 2048 MiB limit, in each probe that calls it (the handshake's)
+    # aborts: under the default 2048 MiB limit, in each probe that calls it; one defect, one
+    # finding (the handshake's), the other probes in its evidence
     report = _report("DAE703-HelloWorldDAE-DEFECT_MEMORY_BLOWUP")
-    in_handshake = [f for f in report.findings
-                    if f.code == "DAE703" and f.evidence_dict().get("probe") == "DAE710"]
-    assert_exact(in_handshake, code="DAE703", severity="error",
-                 subject="fmi3GetContinuousStateDerivatives", file=_binary("HelloWorldDAE"),
-                 line=None, part=None,
-                 evidence={"probe": "DAE710", "call": "fmi3GetContinuousStateDerivatives",
-                           "call_in_progress": True, "exit": "killed by SIGABRT",
-                           "limit_mib": 2048})
+    found = assert_exact(report, code="DAE703", severity="error",
+                         subject="fmi3GetContinuousStateDerivatives",
+                         file=_binary("HelloWorldDAE"), line=None, part=None,
+                         evidence={"probe": "DAE710",
+                                   "call": "fmi3GetContinuousStateDerivatives",
+                                   "call_in_progress": True, "exit": "killed by SIGABRT",
+                                   "limit_mib": 2048, "place": "probe DAE710 enable-handshake"})
+    assert [f.code for f in report.findings].count("DAE703") == 1
+    assert _also(found) == [("DAE703", "probe DAE714 state-vectors-inconsistent"),
+                            ("DAE703", "probe DAE724 evaluation-failed"),
+                            ("DAE703", "probe DAE730 state-set-ignored")]
 
 
 def test_exact_binary_not_loadable():
@@ -328,13 +332,6 @@ def test_exact_event_indicators_inconsistent():
                            "tolerance": 1.0001e-10, "rtol": 1e-10, "atol": 1e-14})
 
 
-def _where(report: FmuReport, code: str, **evidence) -> list:
-    """The findings of ``code`` whose evidence has these values (one finding per mode or per
-    probe shares its subject, file and line with the others)."""
-    return [f for f in report.findings if f.code == code
-            and all(f.evidence_dict().get(k) == v for k, v in evidence.items())]
-
-
 def test_exact_state_vectors_inconsistent():
     # the last element of fmi3GetContinuousStateDerivatives, der(x2) (line 23), is
     # 1e-6 * (1 + |der(x2)|) off fmi3GetFloat64's
@@ -358,33 +355,33 @@ def test_exact_state_vectors_inconsistent():
 
 
 def test_exact_state_nominals_invalid():
-    # x1's nominal (element 0, line 20) is 0 whatever the buffer held, in both modes
+    # x1's nominal (element 0, line 20) is 0 whatever the buffer held, in both modes: one
+    # finding, the other mode in its evidence
     report = _report("DAE715-SimpleDAE-DEFECT_NOMINAL_INVALID")
-    for mode in ("DAE mode", "ODE mode"):
-        in_mode = _where(report, "DAE715", mode=mode)
-        assert_exact(in_mode, code="DAE715", severity="error",
-                     subject="x1", file=MD, line=20, part=None,
-                     evidence={"index": 0, "into_nan": 0.0, "into_1e300": 0.0,
-                               "fills": ["nan", 1e300], "mode": mode,
-                               "state": "Continuous-Time Mode"})
+    found = assert_exact(report, code="DAE715", severity="error",
+                         subject="x1", file=MD, line=20, part=None,
+                         evidence={"index": 0, "into_nan": 0.0, "into_1e300": 0.0,
+                                   "fills": ["nan", 1e300], "mode": "DAE mode",
+                                   "state": "Continuous-Time Mode", "place": "DAE mode"})
+    assert _also(found) == [("DAE715", "ODE mode")]
     # left unwritten: the element reads back what the caller's buffer held
     report = _report("DAE715-SimpleDAE-DEFECT_NOMINAL_UNWRITTEN")
-    in_mode = _where(report, "DAE715", mode="DAE mode")
-    assert_exact(in_mode, code="DAE715", severity="error",
-                 subject="x1", file=MD, line=20, part="unwritten",
-                 evidence={"index": 0, "into_nan": float("nan"), "into_1e300": 1e300,
-                           "mode": "DAE mode"})
+    found = assert_exact(report, code="DAE715", severity="error",
+                         subject="x1", file=MD, line=20, part="unwritten",
+                         evidence={"index": 0, "into_nan": float("nan"), "into_1e300": 1e300,
+                                   "mode": "DAE mode"})
+    assert _also(found) == [("DAE715", "ODE mode")]
 
 
 def test_exact_state_nominal_not_xml():
     # 1.1 times x1's XML nominal 1 (line 20)
     report = _report("DAE716-SimpleDAE-DEFECT_NOMINAL_NOT_XML")
-    for mode in ("DAE mode", "ODE mode"):
-        in_mode = _where(report, "DAE716", mode=mode)
-        assert_exact(in_mode, code="DAE716", severity="info",
-                     subject="x1", file=MD, line=20, part=None, rel=1e-12,
-                     evidence={"index": 0, "nominal": 1.1, "xml_nominal": 1.0, "mode": mode,
-                               "rtol": 1e-12, "state": "Continuous-Time Mode"})
+    found = assert_exact(report, code="DAE716", severity="info",
+                         subject="x1", file=MD, line=20, part=None, rel=1e-12,
+                         evidence={"index": 0, "nominal": 1.1, "xml_nominal": 1.0,
+                                   "mode": "DAE mode", "rtol": 1e-12,
+                                   "state": "Continuous-Time Mode"})
+    assert _also(found) == [("DAE716", "ODE mode")]
 
 
 def test_exact_stale_values_read():
@@ -443,28 +440,28 @@ def test_exact_evaluation_failed_read_back():
 
 def test_exact_event_update_invalid():
     # the first event iteration at EventDAE's first event (t = 0.25) leaves every output
-    # argument as the caller preset it; once per mode
+    # argument as the caller preset it, in both modes: one finding, the ODE mode's in it
     report = _report("DAE734-EventDAE-DEFECT_EVENT_OUTPUTS_UNWRITTEN")
-    for mode in ("dae", "ode"):
-        in_mode = _where(report, "DAE734", mode=mode)
-        assert_exact(in_mode, code="DAE734", severity="error",
-                     subject="discreteStatesNeedUpdate", file=MD, line=None, part=None,
-                     evidence={"mode": mode, "t": 0.25, "call": 1,
-                               "unwritten": ["discreteStatesNeedUpdate", "terminateSimulation",
-                                             "nominalsOfContinuousStatesChanged",
-                                             "valuesOfContinuousStatesChanged",
-                                             "nextEventTimeDefined"]})
+    found = assert_exact(report, code="DAE734", severity="error",
+                         subject="discreteStatesNeedUpdate", file=MD, line=None, part=None,
+                         evidence={"mode": "dae", "t": 0.25, "call": 1,
+                                   "place": "DAE mode, t = 0.25",
+                                   "unwritten": ["discreteStatesNeedUpdate",
+                                                 "terminateSimulation",
+                                                 "nominalsOfContinuousStatesChanged",
+                                                 "valuesOfContinuousStatesChanged",
+                                                 "nextEventTimeDefined"]})
+    assert _also(found) == [("DAE734", "ODE mode, t = 0.25")]
 
 
 def test_exact_next_event_time_not_ahead():
     # at the time event t = 0.75 the FMU announces t - 0.1
     report = _report("DAE735-EventDAE-DEFECT_NEXT_EVENT_PAST=0.1")
-    for mode in ("dae", "ode"):
-        in_mode = _where(report, "DAE735", mode=mode)
-        assert_exact(in_mode, code="DAE735", severity="error",
-                     subject="nextEventTime", file=MD, line=None, part=None, rel=1e-12,
-                     evidence={"mode": mode, "t": 0.75, "next_event_time": 0.65,
-                               "behind": 0.1})
+    found = assert_exact(report, code="DAE735", severity="error",
+                         subject="nextEventTime", file=MD, line=None, part=None, rel=1e-12,
+                         evidence={"mode": "dae", "t": 0.75, "next_event_time": 0.65,
+                                   "behind": 0.1})
+    assert _also(found) == [("DAE735", "ODE mode, t = 0.75")]
 
 
 def test_exact_values_stale_after_event():
@@ -484,23 +481,22 @@ def test_exact_values_stale_after_event():
 def test_exact_states_changed_flag_spurious():
     # at the first event, t = 0.25, x still holds 1
     report = _report("DAE737-EventDAE-DEFECT_STATES_CHANGED_SPURIOUS")
-    for mode in ("dae", "ode"):
-        in_mode = _where(report, "DAE737", mode=mode)
-        assert_exact(in_mode, code="DAE737", severity="error",
-                     subject="valuesOfContinuousStatesChanged", file=MD, line=None, part=None,
-                     evidence={"mode": mode, "t": 0.25, "states": [1.0]})
+    found = assert_exact(report, code="DAE737", severity="error",
+                         subject="valuesOfContinuousStatesChanged", file=MD, line=None,
+                         part=None, evidence={"mode": "dae", "t": 0.25, "states": [1.0]})
+    assert _also(found) == [("DAE737", "ODE mode, t = 0.25")]
 
 
 def test_exact_stop_time_refused():
     # SimpleDAE's DefaultExperiment: start 0, stop 1, the default tolerance 1e-6
     report = _report("DAE738-SimpleDAE-DEFECT_STOP_TIME_REFUSED")
-    for mode in ("dae", "ode"):
-        in_mode = _where(report, "DAE738", mode=mode)
-        assert_exact(in_mode, code="DAE738", severity="warning",
-                     subject="fmi3EnterInitializationMode", file=MD, line=None, part=None,
-                     evidence={"call": "fmi3EnterInitializationMode", "status": "fmi3Error",
-                               "mode": mode, "start_time": 0.0, "stop_time": 1.0,
-                               "tolerance_defined": True, "tolerance": 1e-06})
+    found = assert_exact(report, code="DAE738", severity="warning",
+                         subject="fmi3EnterInitializationMode", file=MD, line=None, part=None,
+                         evidence={"call": "fmi3EnterInitializationMode",
+                                   "status": "fmi3Error", "mode": "dae", "start_time": 0.0,
+                                   "stop_time": 1.0, "tolerance_defined": True,
+                                   "tolerance": 1e-06})
+    assert _also(found) == [("DAE738", "ODE mode")]
 
 
 def test_exact_illegal_call_accepted():
@@ -797,25 +793,27 @@ def test_exact_ode_dae_trajectory_mismatch():
 
 def test_exact_invariant_drift():
     # der(p) = 1.05 v: the energy (the <Invariant> at line 19, vr 8) falls from 4 to 3.81
+    # in both modes' runs: one finding, the ODE run's in it
     report = _report("DAE806-MassSpringDAE-DEFECT_ENERGY_DRIFT")
-    for mode, worst in (("DAE mode", 3.8095150369891932), ("ODE mode", 3.809609024979432)):
-        in_mode = _where(report, "DAE806", mode=mode)
-        assert_exact(in_mode, code="DAE806", severity="info",
-                     subject="energy", file=MAN, line=19, part=None, rel=1e-4,
-                     evidence={"mode": mode, "value_reference": 8, "initial": 4.0,
-                               "worst": worst, "t_worst": 2.31, "tolerance": 4e-4,
-                               "rtol": 1e-06, "times": 101})
+    found = assert_exact(report, code="DAE806", severity="info",
+                         subject="energy", file=MAN, line=19, part=None, rel=1e-4,
+                         evidence={"mode": "DAE mode", "value_reference": 8, "initial": 4.0,
+                                   "worst": 3.8095150369891932, "t_worst": 2.31,
+                                   "tolerance": 4e-4, "rtol": 1e-06, "times": 101})
+    assert _also(found) == [("DAE806", "ODE mode trajectory")]
 
 
 def test_exact_next_event_time_behind_during_simulation():
     # after the state event (x falls to 0.5 at t = ln 2) every event announces t - 0.05
+    # in both modes' runs: one finding, the ODE run's in it
     report = _report("DAE807-EventDAE-DEFECT_STALE_TIME_EVENT")
-    for mode in ("dae", "ode"):
-        found = assert_exact(report, code="DAE807", severity="error",
-                             subject=f"{mode}:nextEventTime", file=MAN, line=2, part=None,
-                             rel=1e-9,
-                             evidence={"mode": mode, "t_reached": 1.0, "stop_time": 1.0,
-                                       "behind": 0.05, "count": 1})
-        ev = found.evidence_dict()
-        assert ev["t"] == pytest.approx(math.log(2), abs=1e-5)
-        assert ev["next_event_time"] == pytest.approx(ev["t"] - 0.05, rel=1e-12)
+    found = assert_exact(report, code="DAE807", severity="error",
+                         subject="dae:nextEventTime", file=MAN, line=2, part=None, rel=1e-9,
+                         evidence={"mode": "dae", "t_reached": 1.0, "stop_time": 1.0,
+                                   "behind": 0.05, "count": 1})
+    ev = found.evidence_dict()
+    assert ev["t"] == pytest.approx(math.log(2), abs=1e-5)
+    assert ev["next_event_time"] == pytest.approx(ev["t"] - 0.05, rel=1e-12)
+    (other,) = [dict(a) for a in ev["also"]]
+    assert other["rule"] == "DAE807" and other["where"].startswith(
+        "'ode:nextEventTime', ODE-mode simulation, t = 0.69314")

@@ -32,7 +32,15 @@ def _findings(scene: str, *defines: str, may_skip: tuple[str, ...] = ()
 
 
 def _modes(found: dict[str, list[dict]], code: str) -> set[str]:
-    return {e["mode"] for e in found.get(code, [])}
+    """The modes a rule's findings were seen in: each finding's own, and those of the places
+    folded into it (one fault seen in both modes is one finding, ``also`` in its evidence)."""
+    modes = set()
+    for e in found.get(code, []):
+        modes.add(e["mode"])
+        for other in e.get("also", ()):
+            where = dict(other)["where"]
+            modes.add("ode" if "ODE" in where else "dae")
+    return modes
 
 
 @pytest.mark.parametrize("scene", ["EventDAE", "SimpleDAE", "Robertson"])

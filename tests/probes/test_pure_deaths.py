@@ -388,7 +388,8 @@ def test_a_memory_error_during_a_call_is_the_binarys(tmp_path):
     assert v.subject == "fmi3GetFloat64" and v.location == Location(file=BINARY)
     assert thaw(v.evidence) == {"probe": PROBE, "call": "fmi3GetFloat64",
                                 "call_in_progress": True, "exit": "MemoryError",
-                                "limit_mib": 1000}
+                                "limit_mib": 1000, "place": run.names(PROBE)}
+    assert v.cause == D.MEMORY_CAUSE   # every probe's death at the limit is one finding
     assert run.outcome.run == {PROBE}
 
 
@@ -437,7 +438,8 @@ def test_memory_exhausted_while_idle_after_calls_grew_it_is_the_binarys(tmp_path
     assert thaw(v.evidence) == {
         "probe": PROBE, "call": "fmi3GetFloat64", "call_in_progress": False,
         "exit": "MemoryError", "grown_in_fmi_calls_mib": 500, "last_growing_call": "fmi3DoStep",
-        "limit_mib": 1000, "stderr": "oom"}
+        "limit_mib": 1000, "stderr": "oom", "place": run.names(PROBE)}
+    assert v.cause == D.MEMORY_CAUSE
     assert run.outcome.run == {PROBE}
 
 

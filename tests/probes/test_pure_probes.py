@@ -546,7 +546,9 @@ def test_a_next_event_time_behind_an_event_is_named_with_its_count():
         "only drop it")
     assert v.subject == "dae:nextEventTime" and v.location == ROOT
     assert thaw(v.evidence) == _run_evidence(dae, t=0.5, next_event_time=0.25, behind=0.25,
-                                             events_behind=[[0.5, 0.25], [0.75, 0.75]], count=7)
+                                             events_behind=[[0.5, 0.25], [0.75, 0.75]], count=7,
+                                             place="DAE-mode simulation, t = 0.5")
+    assert v.cause == causes.NEXT_EVENT_NOT_AHEAD   # the walk's finding of the same fault
     with pytest.raises(ProbeSkipped) as info:
         list(V.next_event_time_behind_during_simulation(
             _sim_ctx(dae, facts={NEXT_EVENT_FAULT: "x" * 200})))

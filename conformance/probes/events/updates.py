@@ -20,6 +20,7 @@ from typing import Iterator
 
 import numpy as np
 
+from ...report import causes
 from ...report.findings import Location, Violation, evidence
 from ...model.description import MODEL_DESCRIPTION
 from ...numerics.events import MAX_UPDATES
@@ -31,6 +32,12 @@ from ..instruments.jacobian_layout import MODE_NAMES
 
 def _where(ctx: ProbeContext) -> Location:
     return Location(file=getattr(ctx.model, "file", None) or MODEL_DESCRIPTION)
+
+
+def _place(mode: str, t: float) -> str:
+    """Where a fault was seen: the mode and the event instant (the other mode's sighting of
+    the same fault is folded into the first: ``Violation.cause``)."""
+    return f"{mode}, t = {t:.10g}"
 
 
 def _visited(all_walks: list[Walk]) -> None:
@@ -55,24 +62,30 @@ def event_update_invalid(ctx: ProbeContext) -> Iterator[Violation]:
                     "held (a preset true discreteStatesNeedUpdate never ends the iteration)",
                     _where(ctx), evidence(mode=w.mode, t=i.t, unwritten=list(i.unwritten),
                                           call=i.updates, preset="0xA5 (neither false nor "
-                                          "true); nextEventTime -7.77e307"),
-                    subject=i.unwritten[0])
+                                          "true); nextEventTime -7.77e307",
+                                          place=_place(mode, i.t)),
+                    subject=i.unwritten[0],
+                    cause=causes.FAULT.format(
+                        f"leaves {i.unwritten[0]} of fmi3UpdateDiscreteStates unwritten"))
                 break
             if i.endless:
                 yield Violation(
                     f"the event iteration at t = {i.t:.10g} ({mode}) does not settle: "
                     f"fmi3UpdateDiscreteStates still says discreteStatesNeedUpdate after "
                     f"{MAX_UPDATES} calls", _where(ctx),
-                    evidence(mode=w.mode, t=i.t, calls=MAX_UPDATES),
-                    subject="discreteStatesNeedUpdate", part="iteration-not-settled")
+                    evidence(mode=w.mode, t=i.t, calls=MAX_UPDATES, place=_place(mode, i.t)),
+                    subject="discreteStatesNeedUpdate", part="iteration-not-settled",
+                    cause=causes.FAULT.format("never settles an event iteration"))
                 break
             if i.error is not None:
                 yield Violation(
                     f"fmi3UpdateDiscreteStates returns {i.error.status} at t = {i.t:.10g} "
                     f"({mode}), in Event Mode entered from Continuous-Time Mode at the FMU's own "
                     "states: a legal call", _where(ctx),
-                    evidence(error_evidence(i.error), mode=w.mode, t=i.t),
-                    subject="fmi3UpdateDiscreteStates", part="update-refused")
+                    evidence(error_evidence(i.error), mode=w.mode, t=i.t,
+                             place=_place(mode, i.t)),
+                    subject="fmi3UpdateDiscreteStates", part="update-refused",
+                    cause=causes.FAULT.format("refuses fmi3UpdateDiscreteStates at an event"))
                 break
 
 
@@ -91,8 +104,10 @@ def next_event_time_not_ahead(ctx: ProbeContext) -> Iterator[Violation]:
                     f"fmi3UpdateDiscreteStates announces nextEventTime = {nxt:.17g} {when} at "
                     f"t = {t:.17g} ({mode}): the next time event must lie ahead, an importer "
                     "cannot go back to it (it skips it, or stops)", _where(ctx),
-                    evidence(mode=w.mode, t=t, next_event_time=nxt, behind=t - nxt),
-                    subject="nextEventTime")
+                    evidence(mode=w.mode, t=t, next_event_time=nxt, behind=t - nxt,
+                             place=_place(mode, t)),
+                    subject="nextEventTime",
+                    cause=causes.NEXT_EVENT_NOT_AHEAD)
                 break
 
 
@@ -149,8 +164,11 @@ def states_changed_flag_spurious(ctx: ProbeContext) -> Iterator[Violation]:
                     f"fmi3UpdateDiscreteStates says valuesOfContinuousStatesChanged at "
                     f"t = {i.t:.10g} ({mode}), but every state holds the value it had before "
                     "the event: an importer re-initialises its integrator at every such event",
-                    _where(ctx), evidence(mode=w.mode, t=i.t, states=[float(v) for v in after]),
-                    subject="valuesOfContinuousStatesChanged")
+                    _where(ctx), evidence(mode=w.mode, t=i.t, states=[float(v) for v in after],
+                                          place=_place(mode, i.t)),
+                    subject="valuesOfContinuousStatesChanged",
+                    cause=causes.FAULT.format(
+                        "says valuesOfContinuousStatesChanged when no state changed"))
                 break
 
 

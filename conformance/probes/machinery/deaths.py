@@ -52,6 +52,9 @@ ILLEGAL_CALLS: dict[str, frozenset[str]] = {
 
 #: The cause every crash of the binary names (``Violation.cause``): one finding for them all.
 CRASH_CAUSE = "the binary crashed"
+#: All deaths at the memory limit that the binary's calls caused are one defect (its memory
+#: grows in every probe that calls the function): one finding, the probes listed in its evidence.
+MEMORY_CAUSE = causes.FAULT.format("exhausts the address-space limit")
 
 log = logging.getLogger(__name__)
 
@@ -255,7 +258,8 @@ class Diagnosis:
                 f"{self.run.names(probe)} ({how})", Location(file=self.run.binary),
                 evidence(facts, exit=how, grown_in_fmi_calls_mib=round(grown / (1 << 20)),
                          last_growing_call=grew, limit_mib=limit_mib,
-                         **self._stderr_evidence()), subject=grew, part="grown-across-calls"))
+                         place=self.run.names(probe), **self._stderr_evidence()),
+                subject=grew, part="grown-across-calls", cause=MEMORY_CAUSE))
             return probe, ""
         if memory and not (call and facts["call_in_progress"]):  # ours: the binary was idle
             return probe, self._own(
@@ -283,8 +287,9 @@ class Diagnosis:
                     f"the last of them {took}" if took and took != call else ""),
                 Location(file=self.run.binary),
                 ev + evidence(limit_mib=limit_mib, **({"grown_in_fmi_calls_mib": round(
-                    grown / (1 << 20)), "last_growing_call": took} if took else {})),
-                subject=took or call or probe))
+                    grown / (1 << 20)), "last_growing_call": took} if took else {}),
+                    place=self.run.names(probe)),
+                subject=took or call or probe, cause=MEMORY_CAUSE))
         else:
             illegal = facts["call_in_progress"] and call in ILLEGAL_CALLS.get(probe, ())
             # crashes reached by several probes or calls are one defect (a binary that

@@ -140,8 +140,9 @@ def state_nominals_invalid(ctx: ProbeContext) -> Iterator[Violation]:
                 f"fmi3GetNominalsOfContinuousStates returns {got.status} in Continuous-Time "
                 f"Mode ({_mode(mode)}), where FMI 3.0 allows it", root_location(ctx),
                 evidence(call=got.call, status=got.status, log=list(got.log[:10]),
-                         mode=_mode(mode), state="Continuous-Time Mode"),
-                subject="fmi3GetNominalsOfContinuousStates", part="refused")
+                         mode=_mode(mode), state="Continuous-Time Mode", place=_mode(mode)),
+                subject="fmi3GetNominalsOfContinuousStates", part="refused",
+                cause=causes.FAULT.format("refuses fmi3GetNominalsOfContinuousStates"))
             continue
         first, second = got
         for i, vr in enumerate(states):
@@ -166,8 +167,9 @@ def _nominal_invalid(ctx: ProbeContext, layout: Layout, mode: str, i: int, vr: i
         f"in {_mode(mode)}: the nominal {why}; FMI 3.0 requires nominals[i] > 0.0",
         var_location(ctx, vr),
         evidence(index=i, into_nan=a, into_1e300=b, fills=["nan", 1e300],
-                 mode=_mode(mode), state="Continuous-Time Mode"),
-        layout.name(vr), part=part)
+                 mode=_mode(mode), state="Continuous-Time Mode", place=_mode(mode)),
+        layout.name(vr), part=part,
+        cause=causes.FAULT.format(f"gives no valid nominal of '{layout.name(vr)}'"))
 
 
 def state_nominal_not_xml(ctx: ProbeContext, *, rtol: float) -> Iterator[Violation]:
@@ -191,8 +193,9 @@ def state_nominal_not_xml(ctx: ProbeContext, *, rtol: float) -> Iterator[Violati
                 "fmi3UpdateDiscreteStates said nominalsOfContinuousStatesChanged: an importer "
                 "scales its error control with one or the other", var_location(ctx, vr),
                 evidence(index=i, nominal=value, xml_nominal=declared, mode=_mode(mode),
-                         rtol=rtol, state="Continuous-Time Mode"),
-                layout.name(vr))
+                         rtol=rtol, state="Continuous-Time Mode", place=_mode(mode)),
+                layout.name(vr), cause=causes.FAULT.format(
+                    f"gives a nominal of '{layout.name(vr)}' its XML does not"))
 
 
 def _declared_nominal(ctx: ProbeContext, vr: int) -> float | None:

@@ -22,6 +22,7 @@ from typing import Any, Callable, Iterator
 
 import numpy as np
 
+from ...report import causes
 from ...report.findings import Location, Violation, evidence
 from ...model.description import MODEL_DESCRIPTION
 from ...runtime.arrays import vr_array
@@ -67,9 +68,10 @@ def stop_time_refused(ctx: ProbeContext) -> Iterator[Violation]:
                     "passes its stop time (fmpy's simulate_fmu always does) cannot initialise "
                     "the FMU", _where(ctx),
                     evidence(error_evidence(exc), mode=mode, start_time=t0, stop_time=stop,
-                             tolerance_defined=True, tolerance=1e-6),
+                             tolerance_defined=True, tolerance=1e-6, place=MODE_NAMES[mode]),
                     subject="fmi3EnterInitializationMode",
-                    part="no-default-stop-time" if own else None)
+                    part="no-default-stop-time" if own else None,
+                    cause=causes.FAULT.format("refuses a stop time in fmi3EnterInitializationMode"))
                 continue
             inst.initialised = inst.initializing = True
         finally:

@@ -16,6 +16,7 @@ from typing import Iterator
 
 import numpy as np
 
+from ...report import causes
 from ...report.findings import Location, Violation, evidence
 from ..instruments.api import FmiError, Point, ProbeContext, ProbeSkipped
 from ..instruments.common import layout_of
@@ -95,8 +96,8 @@ def _drift(traj, series: np.ndarray, vr: int, name: str, where: Location, nomina
                             worst=float(series[k]), t_worst=float(traj.times[k]),
                             drift=float(gaps[k]), tolerance=tolerance,
                             scale="factor * rtol * max(|initial|, nominal)", rtol=traj.rtol,
-                            times=len(series)),
-            subject=name)
+                            times=len(series), place=f"{MODE_NAMES[mode]} trajectory"),
+            subject=name, cause=causes.FAULT.format(f"drifts from the invariant '{name}'"))
 
 
 PROBES = {

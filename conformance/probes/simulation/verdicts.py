@@ -303,8 +303,9 @@ def next_event_time_behind_during_simulation(ctx: ProbeContext) -> Iterator[Viol
             "only drop it", root_location(ctx),
             run_evidence(traj, t=t, next_event_time=announced, behind=t - announced,
                          events_behind=[list(e) for e in traj.events_behind],
-                         count=traj.events_behind_count),
-            subject=f"{traj.mode}:nextEventTime")
+                         count=traj.events_behind_count,
+                         place=f"{traj.mode.upper()}-mode simulation, t = {t:.10g}"),
+            subject=f"{traj.mode}:nextEventTime", cause=causes.NEXT_EVENT_NOT_AHEAD)
 
 
 PROBES = {

@@ -5,7 +5,11 @@ import json
 
 import pytest
 
+from conformance.commands import cli
 from conformance.commands.cli import main
+from conformance.commands.exit_codes import UsageError
+from conformance.report.catalogue import CatalogueError
+from tests.clikit import lsdae
 from tests.fixtures import Case, materialise
 
 
@@ -170,3 +174,24 @@ def test_explain_says_how_to_set_an_option(capsys):
     assert main(["explain", "DAE740"]) == 0
     text = capsys.readouterr().out
     assert "--rule-option DAE740." in text and "[tool.lsdae.rule-options.DAE740]" in text
+
+
+@pytest.mark.parametrize("exc, code, message", [
+    (KeyboardInterrupt(), 130, "lsdae: interrupted\n"),
+    (UsageError("no such thing"), 2, "lsdae: no such thing\n"),
+    (CatalogueError("duplicate rule code DAE001"), 2,
+     "lsdae: the rule catalogue is broken: duplicate rule code DAE001\n"),
+    (ValueError("bad"), 2, "lsdae: internal error: ValueError: bad (run with -v for details)\n"),
+])
+def test_what_a_command_raises_is_one_line_and_an_exit_code(monkeypatch, exc, code, message):
+    """Outside a run of checks (which writes what it finished), Ctrl-C, a usage error, a broken
+    catalogue and an internal error each end in one line on stderr."""
+    seen = []
+
+    def command(args):
+        seen.append(args.command)
+        raise exc
+
+    monkeypatch.setitem(cli.COMMANDS, "rules", command)
+    assert lsdae("rules") == (code, "", message)
+    assert seen == ["rules"]

@@ -2,8 +2,6 @@
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
@@ -11,8 +9,6 @@ import pytest
 from conformance import __version__
 from tests.fixtures import build_scene
 from tests.clikit import every_format, lsdae, outputs
-
-REPO = Path(__file__).resolve().parents[2]
 
 
 def _shards(paths: list[str], count: int, folder: Path, *options: str) -> list[str]:
@@ -89,12 +85,18 @@ def _set(path: str, value):
     return edit
 
 
+def _text(folder: Path, name: str, text: str) -> str:
+    (folder / name).write_text(text, encoding="utf-8")
+    return str(folder / name)
+
+
 BAD = {
     "one shard missing": lambda s, f: s[:2],
     "a shard twice": lambda s, f: [s[0], s[1], s[1], s[2]],
-    "not JSON": lambda s, f: [*s[:2], str(REPO / "README.md")],
+    "not JSON": lambda s, f: [*s[:2], _text(f, "notes.md", "# notes\n")],
     "not a file": lambda s, f: [*s[:2], str(f / "missing.json")],
-    "not an lsdae report": lambda s, f: [*s[:2], str(REPO / "pyproject.toml"), s[2]],
+    "not an lsdae report": lambda s, f: [*s[:2], _text(f, "pyproject.toml", "[tool.lsdae]\n"),
+                                         s[2]],
     "JSON of something else": lambda s, f: [*s[:2], _edited(s[2], f, lambda d: d.clear())],
     "an unsharded report": lambda s, f: [*s[:2], _edited(s[2], f, lambda d: d.pop("shard"))],
     "another lsdae version": lambda s, f: [*s[:2], _edited(s[2], f, _set("version", "0.0.1"))],
@@ -116,17 +118,49 @@ BAD = {
         *s[:2], _edited(s[2], f, _set("options.baseline", {"file": "b.json"}))],
 }
 
+# The one line each prints: {s1}..{s3} the shard reports, {e1}, {e3} edited copies of shards 1
+# and 3, {f} the test's folder.
+MESSAGES = {
+    "one shard missing": "shard 3 of 3 missing: give the JSON report of every shard",
+    "a shard twice": "shard 2/3 is given twice: {s2} and {s2}",
+    "not JSON": "{f}/notes.md is not JSON: Expecting value: line 1 column 1 (char 0)",
+    "not a file": "cannot read {f}/missing.json: No such file or directory",
+    "not an lsdae report": "{f}/pyproject.toml is not JSON: Expecting value: line 1 column 2 "
+                           "(char 1)",
+    "JSON of something else": '{e3}: not an lsdae JSON report (no "tool": "lsdae")',
+    "an unsharded report": "{e3} is not a shard report (it was written without --shard I/N)",
+    "another lsdae version": f"{{e3}} was written by lsdae 0.0.1; this is lsdae {__version__}: "
+                             "merge with the version that checked",
+    "other options": "{e3} (shard 3/3) does not belong with {s1} (shard 1/3): the options "
+                     "differ",
+    "other settings": "{e3} (shard 3/3) does not belong with {s1} (shard 1/3): the lsdae "
+                      "version, rule catalogue or options differ",
+    "another catalogue": "{e1} (shard 1/3) was checked with another rule catalogue than this "
+                         "lsdae's (another installation or rules/): merge where the shards ran",
+    "other inputs": "{e3} (shard 3/3) does not belong with {s1} (shard 1/3): the FMUs given "
+                    "(paths, order or sizes) differ",
+    "another shard count": "{e3} (shard 3/4) does not belong with {s1} (shard 1/3): the number "
+                           "of shards differ",
+    "an FMU in two shards": "an FMU is in two shards: {fmu3} in {e3} (shard 3/3) and {fmu2} in "
+                            "{s2} (shard 2/3)",
+    "positions damaged": "{e3}: the shard section is damaged",
+    "an interrupted shard": "{e3} (shard 3/3) was interrupted (1 FMUs not checked): run that "
+                            "shard again",
+    "a baselined shard": "{e3} (shard 3/3) has a baseline applied; a shard report must not (give "
+                         "the baseline to lsdae merge)",
+}
+
 
 @pytest.mark.parametrize("case", sorted(BAD))
 def test_inputs_that_do_not_belong_together_are_a_usage_error(three, tmp_path, case):
     shards, _ = three
-    done = subprocess.run([sys.executable, "-m", "conformance", "merge",
-                           *BAD[case](shards, tmp_path), "--format", "json"],
-                          capture_output=True, text=True, cwd=REPO)
-    assert done.returncode == 2, done.stderr
-    assert "Traceback" not in done.stderr
-    assert len(done.stderr.strip().splitlines()) == 1, done.stderr
-    assert done.stdout == ""
+    code, out, err = lsdae("merge", *BAD[case](shards, tmp_path), "--format", "json")
+    first = json.loads(Path(shards[2]).read_text())["fmus"][0]["path"]
+    placed = json.loads(Path(shards[1]).read_text())["fmus"][0]["path"]
+    names = {"s1": shards[0], "s2": shards[1], "s3": shards[2], "f": str(tmp_path),
+             "e1": str(tmp_path / "edited-shard1.json"),
+             "e3": str(tmp_path / "edited-shard3.json"), "fmu3": first, "fmu2": placed}
+    assert (code, out, err) == (2, "", f"lsdae: {MESSAGES[case].format(**names)}\n")
 
 
 def test_the_three_shards_do_merge(three, tmp_path):

@@ -13,8 +13,9 @@ from conformance.commands.cli import main
 from conformance.commands.precommit import fmu_root, fmu_roots
 from tests.fixtures import BOOLEAN_DAE, INT_DAE
 
-REPO = Path(__file__).resolve().parents[2]
-HOOKS = REPO / ".pre-commit-hooks.yaml"
+# the repository's root; from mutmut's copy of the tests (build/mutation-self/...), the real one
+HOOKS = next(folder / ".pre-commit-hooks.yaml" for folder in Path(__file__).resolve().parents
+             if (folder / ".pre-commit-hooks.yaml").is_file())
 MANIFEST = "extra/org.fmi-standard.fmi-ls-dae/fmi-ls-manifest.xml"
 
 

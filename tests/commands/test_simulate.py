@@ -7,12 +7,16 @@ from __future__ import annotations
 
 import argparse
 import csv
+import re
 import shutil
+import sys
 import zipfile
+from types import SimpleNamespace
 
 import pytest
 
-from conformance.commands.simulate import add_parser, run
+from conformance.commands import simulate
+from conformance.commands.simulate import add_parser, run, summary
 from tests.fixtures import build_scene, variant
 from tests.numerics.systems import VAN_DER_POL_IMPASSE
 
@@ -162,3 +166,128 @@ def test_both_modes_decide_a_gap_themselves_at_any_time(scene, define, code, tmp
     out = capsys.readouterr().out
     assert ("error[DAE805" if code else "info[DAE805") in out
     assert "DAE805" in out and "ode-dae-trajectory-mismatch" in out
+
+
+def _traj(**kw):
+    """A run's record as summary() reads it (conformance/simulate's Trajectory)."""
+    base = dict(mode="dae", ok=True, terminated_at=None, message="done", status="ok",
+                init=None, residual_along=None, t_start=0.0, t_end=2.5, stop_time=2.5,
+                rtol=1e-6, steps=12, function_calls=30, jacobian_calls=4,
+                jacobian="directional derivatives", fmi_calls=99, wall_s=0.0123,
+                has_events=False, event_times=(), state_events=0, time_events=0, indicators=0)
+    return SimpleNamespace(**{**base, **kw})
+
+
+def test_summary_of_a_dae_run_that_reached_the_stop_time():
+    assert summary(_traj()) == (
+        "DAE mode: t = 0 .. 2.5 of 2.5, reached the stop time\n"
+        "  rtol 1e-06, 12 steps, 30 residual and 4 Jacobian evaluations (directional "
+        "derivatives), 99 FMI calls, 0.012 s\n")
+
+
+def test_summary_of_an_ode_run_with_residuals_and_events():
+    traj = _traj(mode="ode", terminated_at=1.25, message="terminated by the FMU at t = 1.25",
+                 t_end=1.25, init={"residual_before": {"max_abs": 0.5},
+                                   "residual_after": {"max_abs": 1e-12}},
+                 residual_along={"max_abs": 3e-9, "residual": "g1", "t": 0.75},
+                 has_events=True, event_times=(0.1, 0.2, 0.3, 0.4, 0.5, 0.6), state_events=1,
+                 time_events=5, indicators=2)
+    assert summary(traj) == (
+        "ODE mode: t = 0 .. 1.25 of 2.5, terminated by the FMU at t = 1.25\n"
+        "  rtol 1e-06, 12 steps, 30 right-hand side and 4 Jacobian evaluations (directional "
+        "derivatives), 99 FMI calls, 0.012 s; initial residual 0.5 -> 1e-12; largest residual "
+        "along the run 3e-09 (g1 at t = 0.75)\n"
+        "  1 state event, 5 time events (2 event indicators) at t = 0.1, 0.2, 0.3, 0.4, 0.5, "
+        "...\n")
+
+
+def test_summary_of_a_failed_run_with_one_of_each_event():
+    traj = _traj(ok=False, status="failed", message="dg/dw became singular", t_end=0.8,
+                 init={"residual_before": {"max_abs": 0.5}}, has_events=True,
+                 event_times=(0.25,), state_events=2, time_events=1, indicators=1)
+    assert summary(traj) == (
+        "DAE mode: t = 0 .. 0.8 of 2.5, failed: dg/dw became singular\n"
+        "  rtol 1e-06, 12 steps, 30 residual and 4 Jacobian evaluations (directional "
+        "derivatives), 99 FMI calls, 0.012 s\n"
+        "  2 state events, 1 time event (1 event indicator) at t = 0.25\n")
+    assert summary(_traj(has_events=True, indicators=3)).endswith(
+        "  0 state events, 0 time events (3 event indicators)\n")
+
+
+def test_comparison_lines():
+    assert simulate._comparison_line({}) == "DAE vs ODE: nothing to compare\n"
+    assert simulate._comparison_line({"worst": None}) == "DAE vs ODE: nothing to compare\n"
+    assert simulate._comparison_line(
+        {"worst": {"gap": 0.01234, "variable": "x", "t": 0.5}, "compared_times": 11}) == (
+        "DAE vs ODE: largest gap 0.0123 tolerance units (x at t = 0.5) over 11 output times\n")
+
+
+def test_static_line_counts_and_names_the_first_three():
+    from conformance.report.findings import Severity
+
+    def finding(name, severity):
+        return SimpleNamespace(name=name, severity=severity)
+
+    findings = [finding("a", Severity.ERROR), finding("b", Severity.WARNING),
+                finding("a", Severity.ERROR), finding("c", Severity.INFO),
+                finding("d", Severity.INFO)]
+    assert simulate._static_line(findings, "m.fmu") == (
+        "static check: 2 errors, 1 warning, 2 infos (a, b, c, ...); `lsdae check m.fmu` "
+        "shows them\n")
+    assert simulate._static_line(findings[1:2], "m.fmu") == (
+        "static check: 1 warning (b); `lsdae check m.fmu` shows them\n")
+
+
+def test_usage_error_messages(tmp_path, capsys):
+    missing = tmp_path / "missing.fmu"
+    assert _main([str(missing)]) == 2
+    assert capsys.readouterr() == ("", f"lsdae: {missing}: no such file or folder\n")
+    assert _main([str(build_scene("HelloWorldDAE")), "--rtol", "1"]) == 2
+    assert capsys.readouterr() == ("", "lsdae: --rtol must be below 1\n")
+
+
+def test_ode_output_without_both_modes_is_said_on_stderr(tmp_path, capsys):
+    ode = tmp_path / "o.csv"
+    assert _main([str(build_scene("HelloWorldDAE")), "--ode-output", str(ode)]) == 0
+    out, err = capsys.readouterr()
+    assert err == "lsdae: --ode-output needs --mode both\n"
+    assert out.startswith("DAE mode: ") and not ode.exists()
+
+
+def test_a_run_stopped_by_its_budget_says_why_and_where(capsys):
+    """A wall-clock budget of a nanosecond runs out before the first step: no finding of the
+    simulation's own (the machine's speed is no verdict), so the reason is a note."""
+    assert _main([str(build_scene("Robertson")), "--time-limit", "1e-9"]) == 1
+    out, err = capsys.readouterr()
+    why = ("lsdae's wall-clock safety net of 1e-09 s ran out (the machine's speed, not the "
+           "FMU's: no verdict)")
+    assert out.startswith(f"DAE mode: t = 0 .. 0 of 40, time-budget: {why}\n")
+    assert out.endswith(
+        "\nnote: time budget: the DAE-mode run was stopped at t = 0 of 40 after 0 steps by "
+        "lsdae's wall-clock safety net (wall_seconds = 1e-09 s of simulation-failed): a faster "
+        "machine could have finished it, so no verdict\n")
+    assert err == f"lsdae: the DAE-mode integration stopped at t = 0 of 40: {why}\n"
+
+
+def test_an_impasse_is_said_on_stderr_without_colour_under_no_color(tmp_path, capsys,
+                                                                    monkeypatch):
+    monkeypatch.setenv("NO_COLOR", "1")
+    monkeypatch.setattr(sys.stdout, "isatty", lambda: True)
+    assert _main([str(build_scene("VanDerPolDAE"))]) == 1
+    out, err = capsys.readouterr()
+    assert "\x1b[" not in out and "error[DAE" in out
+    assert re.fullmatch(r"lsdae: the DAE-mode integration stopped at t = 0\.80\d+ of 1: dg/dw "
+                        r"became singular\n", err), err
+    monkeypatch.delenv("NO_COLOR")
+    assert _main([str(build_scene("VanDerPolDAE")), "--color", "auto"]) == 1
+    assert "\x1b[" in capsys.readouterr().out
+
+
+def test_a_binary_that_dies_before_any_run_is_its_own_finding_and_no_simulation(capsys):
+    """The binary exits inside fmi3SetTime: binary-crashed is printed (the runs' own finding)
+    and nothing was simulated, for no reason a skipped rule or a static finding gives."""
+    assert _main([str(variant("Robertson", defines=["DEFECT_EXIT_IN_CALL"])),
+                  "--color", "never"]) == 1
+    out, err = capsys.readouterr()
+    assert out.startswith("\nerror[DAE701 binary-crashed]: ")
+    assert err == "lsdae: nothing was simulated: no simulation ran\n"

@@ -164,7 +164,10 @@ def test_unknown_vr_not_an_integer_and_missing():
            '</fmiDAEManifest>')
     bare = read_manifest(etree.ElementTree(etree.fromstring(xml)), draft="alpha1")
     (v,) = algebraic.algebraic_unknown_vr(_ctx(bare))
-    assert dict(v.evidence)["reason"] == "missing"
+    assert dict(v.evidence) == {"value_reference": None, "reason": "missing"}
+    assert (v.subject, v.part) == (None, "missing-or-not-integer")
+    assert (v.location.file, v.location.line, v.location.path) == (
+        bare.file, 1, "/fmiDAEManifest/AlgebraicVariables/AlgebraicVariable[1]")
 
 
 def test_duplicate_points_at_the_repeat():
@@ -172,6 +175,18 @@ def test_duplicate_points_at_the_repeat():
     (v,) = algebraic.algebraic_duplicate(_ctx(manifest))
     assert v.location.line == manifest.algebraic[2].line
     assert dict(v.evidence)["first_listed_at_line"] == manifest.algebraic[0].line
+
+
+@pytest.mark.parametrize("vrs, codes", [
+    (("99", "10"), {"DAE301": ["99"], "DAE303": ["n"]}),   # the unresolved entry comes first
+    (("10", "10"), {"DAE302": ["n"], "DAE303": ["n"]}),    # a repeat is classified once
+    (("99", "4", "4", "10"), {"DAE301": ["99"], "DAE302": ["y"], "DAE303": ["n"]}),
+])
+def test_classified_past_unresolved_and_repeated_entries(vrs, codes):
+    residuals = tuple(str(6 + i) for i in range(len(set(vrs)) - ("99" in vrs)))
+    fired = _fired(_ctx(_alpha1(vrs, residuals)))
+    assert {code: [v.subject for v in found] for code, found in fired.items()
+            if code != "DAE405"} == codes
 
 
 def test_unresolved_repeat_is_only_unknown_vr():
@@ -185,6 +200,7 @@ def test_type_rules_point_at_the_variable_role_rules_at_the_manifest():
     (v,) = algebraic.algebraic_not_float(ctx)
     assert v.location.file == "modelDescription.xml"
     assert v.location.line == ctx.model.by_vr[10].line
+    assert v.location.path == "/fmiModelDescription/ModelVariables/Int32[@name='n']"
     assert dict(v.evidence)["type"] == "Int32"
     ctx = _ctx(_alpha1(("4", "8"), ("6", "7")))
     (v,) = algebraic.algebraic_is_input_or_parameter(ctx)
@@ -219,6 +235,14 @@ def test_residual_unknown_vr_not_an_integer():
     (v,) = fired["DAE401"]
     assert v.subject is None
     assert v.location.path.endswith("Residual[2]")
+    assert dict(v.evidence) == {"value_reference": None, "reason": "missing or not an integer"}
+
+
+def test_residual_that_is_also_algebraic_is_left_to_the_algebraic_rule():
+    # y is both: algebraic-is-residual says so; the other residual, d, is still classified
+    fired = _fired(_ctx(_alpha1(("4", "5"), ("4", "12"))))
+    assert {code: [v.subject for v in found] for code, found in fired.items()} == {
+        "DAE307": ["y"], "DAE403": ["d"]}
 
 
 def test_residual_output_is_fine():
@@ -229,6 +253,8 @@ def test_residual_not_float_points_at_variable():
     ctx = _ctx(_alpha1(("4", "5"), ("6", "12")))
     (v,) = residual.residual_not_float_continuous(ctx)
     assert v.location.file == "modelDescription.xml"
+    assert v.location.path == "/fmiModelDescription/ModelVariables/Float64[@name='d']"
+    assert v.location.line == 17
     assert dict(v.evidence)["variability"] == "discrete"
 
 
@@ -270,12 +296,20 @@ def test_count_skipped_when_size_unknown_unresolved_or_repeated():
     assert not list(residual.residual_count_mismatch(_ctx(_alpha1(("4", "5"), ("6", "77", "7")))))
 
 
+def test_count_mismatch_points_at_the_algebraic_variables():
+    (v,) = residual.residual_count_mismatch(_ctx(_alpha1(("4", "5"), ("6",))))
+    assert (v.subject, v.location.file, v.location.line, v.location.path) == (
+        None, "extra/org.fmi-standard.fmi-ls-dae/fmi-ls-manifest.xml", 5,
+        "/fmiDAEManifest/AlgebraicVariables")
+
+
 def test_count_without_algebraic_variables_points_at_first_residual():
     xml = """<fmiDAEManifest><ModelStructure>
       <Residual valueReference="6"/></ModelStructure></fmiDAEManifest>"""
     manifest = read_manifest(etree.ElementTree(etree.fromstring(xml)), draft="alpha1")
     (v,) = residual.residual_count_mismatch(_ctx(manifest))
     assert v.location.path == manifest.residuals[0].path
+    assert (v.location.file, v.location.line) == (manifest.file, 2)
 
 
 def test_formulation_residual_counts_once():

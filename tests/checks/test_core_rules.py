@@ -115,6 +115,8 @@ def test_variable_name_duplicate():
     ctx = ctx_of(variables=VARIABLES + '<Float64 name="y" valueReference="9"/>')
     [v] = run("DAE503", ctx)
     assert v.subject == "y" and ev(v)["value_reference"] == 9 and ev(v)["alias"] is False
+    assert (v.location.line, v.location.path) == (
+        12, "/fmiModelDescription/ModelVariables/Float64[@name='y']")
 
 
 def test_alias_names_take_part_when_the_model_reads_them():
@@ -165,11 +167,30 @@ def test_causality_variability_invalid(decl, fault):
     '<Int32 name="p" valueReference="9" causality="input" start="1"/>',          # default discrete
     '<Float64 name="p" valueReference="9" causality="output" variability="constant" start="1"/>',
     '<Float64 name="p" valueReference="9" clocks="10" variability="discrete"/>',
+    '<Float64 name="p" valueReference="9" causality="parameter" variability="tunable" '
+    'start="1" clocks="10"/>',                                                   # clocked tunable
     '<Clock name="p" valueReference="9" causality="input"/>',
+    '<Clock name="p" valueReference="9" causality="output"/>',
+    '<Clock name="p" valueReference="9"/>',                                      # local
     '<Float64 name="p" valueReference="9" causality="weird" variability="continuous"/>',  # schema's
 ])
 def test_causality_variability_valid(decl):
     assert run("DAE504", ctx_of(variables=VARIABLES + decl)) == []
+
+
+def test_clocked_continuous_when_every_variable_is_clocked():
+    # every variable has a clocks attribute (no variable shares the plain attribute set):
+    # the clocked continuous p is still MV-12's fault
+    xml = ('<fmiModelDescription fmiVersion="3.0" modelName="M" instantiationToken="t">'
+           '<ModelExchange modelIdentifier="M"/><ModelVariables>'
+           '<Float64 name="time" valueReference="0" causality="independent" '
+           'variability="continuous" clocks="1"/>'
+           '<Clock name="c" valueReference="1" causality="input" '
+           'intervalVariability="triggered" clocks="1"/>'
+           '<Float64 name="p" valueReference="2" clocks="1"/>'
+           '</ModelVariables><ModelStructure/></fmiModelDescription>')
+    [v] = run("DAE504", ctx_of(xml))
+    assert v.subject == "p"
 
 
 def test_independent_is_left_to_its_own_rule():
@@ -187,7 +208,12 @@ def test_independent_is_left_to_its_own_rule():
      False),
     ('<Float64 name="p" valueReference="9" causality="parameter" initial="exact" start="1"/>',
      True),
+    ('<Float64 name="p" valueReference="9" causality="structuralParameter" initial="exact" '
+     'start="1"/>', True),
     ('<Float64 name="p" valueReference="9" causality="input" initial="approx" start="1"/>', False),
+    ('<Float64 name="p" valueReference="9" causality="input" initial="exact" start="1"/>', True),
+    ('<Float64 name="p" valueReference="9" causality="input" variability="discrete" '
+     'initial="exact" start="1"/>', True),
     ('<Float64 name="p" valueReference="9" causality="calculatedParameter" initial="exact" '
      'start="1"/>', False),
     ('<Float64 name="p" valueReference="9" causality="calculatedParameter" initial="approx" '
@@ -204,6 +230,35 @@ def test_initial_invalid(decl, ok):
     assert (found == []) == ok
     if not ok:
         assert found[0].subject == "p" and "allowed" in ev(found[0])
+
+
+@pytest.mark.parametrize("causality, variability, allowed", [
+    ("input", "continuous", ("exact",)),
+    ("input", "discrete", ("exact",)),
+    ("parameter", "fixed", ("exact",)),
+    ("structuralParameter", "tunable", ("exact",)),
+    ("calculatedParameter", "fixed", ("approx", "calculated")),
+    ("local", "tunable", ("approx", "calculated")),
+    ("output", "constant", ("exact",)),
+])
+def test_initial_invalid_names_the_allowed_values(causality, variability, allowed):
+    bad = "calculated" if "calculated" not in allowed else "exact"
+    decl = (f'<Float64 name="p" valueReference="9" causality="{causality}" '
+            f'variability="{variability}" initial="{bad}"/>')
+    [v] = run("DAE505", ctx_of(variables=VARIABLES + decl))
+    assert ev(v) == {"initial": bad, "causality": causality, "variability": variability,
+                     "allowed": allowed}
+
+
+def test_attribute_rules_quiet_on_values_the_schema_reports():
+    # a misspelt causality or variability is the schema stage's; the initial and start rules
+    # do not judge the variable by it
+    decl = ('<Float64 name="p" valueReference="9" causality="bogus" initial="exact" start="1"/>'
+            '<Float64 name="q" valueReference="10" causality="bogus" variability="constant"/>'
+            '<Float64 name="r" valueReference="11" variability="bogus" start="1"/>')
+    ctx = ctx_of(variables=VARIABLES + decl)
+    for code in ("DAE504", "DAE505", "DAE506", "DAE507"):
+        assert run(code, ctx) == [], code
 
 
 def test_initial_quiet_when_pair_is_invalid():
@@ -251,12 +306,21 @@ def test_start_not_allowed(decl, fires):
     assert subjects("DAE507", ctx_of(variables=VARIABLES + decl)) == (["p"] if fires else [])
 
 
+def test_start_not_allowed_after_a_missing_start():
+    # p1's start problem (missing) comes first in the model; p2's (not allowed) is this rule's
+    decl = ('<Float64 name="p1" valueReference="9" causality="parameter"/>'
+            '<Float64 name="p2" valueReference="10" start="1"/>')
+    assert subjects("DAE507", ctx_of(variables=VARIABLES + decl)) == ["p2"]
+
+
 # --- DAE508 independent-variable-invalid ------------------------------------------------------
 
 def test_no_independent_variable():
     no_time = VARIABLES.replace('causality="independent" variability="continuous"', "")
     [v] = run("DAE508", ctx_of(variables=no_time))
     assert v.subject is None and ev(v)["independent_variables"] == 0
+    assert (v.location.file, v.location.line, v.location.path) == (
+        "modelDescription.xml", 1, "/fmiModelDescription/ModelVariables")
 
 
 def test_two_independent_variables():
@@ -319,6 +383,27 @@ def test_state_listed_twice():
     assert v.location.path.startswith("/fmiModelDescription/ModelStructure/")
 
 
+def test_csd_without_derivative_after_an_unresolved_one():
+    # the unresolved element is model-structure-unknown-vr's; the loop goes on to the next
+    ctx = ctx_of(variables=VARIABLES.replace(' derivative="2"', ""),
+                 structure='<ContinuousStateDerivative valueReference="99"/>' + STRUCTURE)
+    [v] = run("DAE509", ctx)
+    assert (v.subject, v.part) == ("der(x)", "csd-without-derivative")
+    assert ev(v) == {"value_reference": 3, "type": "Float64", "structure_line": 14}
+
+
+def test_two_states_each_listed_once_are_no_repeat():
+    # der(x) and der(x2) name two states; loc (no derivative attribute) takes the rule past its
+    # fast path, and is the only finding
+    variables = VARIABLES + ('<Float64 name="x2" valueReference="9" initial="exact" start="0"/>'
+                             '<Float64 name="der(x2)" valueReference="10" derivative="9"/>'
+                             '<Float64 name="loc" valueReference="11"/>')
+    structure = STRUCTURE + ('<ContinuousStateDerivative valueReference="10"/>'
+                             '<ContinuousStateDerivative valueReference="11"/>')
+    found = run("DAE509", ctx_of(variables=variables, structure=structure))
+    assert [(v.subject, v.part) for v in found] == [("loc", "csd-without-derivative")]
+
+
 def test_same_derivative_listed_twice():
     structure = STRUCTURE + '<ContinuousStateDerivative valueReference="3"/>'
     assert subjects("DAE509", ctx_of(structure=structure)) == ["der(x)"]
@@ -328,6 +413,9 @@ def test_discrete_state():
     ctx = ctx_of(variables=VARIABLES.replace('initial="exact" start="1"',
                                              'variability="discrete" initial="exact" start="1"'))
     assert subjects("DAE509", ctx) == ["der(x)"]
+    [v] = run("DAE509", ctx)
+    assert ev(v) == {"derivative_variability": "continuous", "state": "x",
+                     "state_variability": "discrete"}
 
 
 def test_derivative_linking_outputs_is_fine():
@@ -340,7 +428,33 @@ def test_derivative_linking_outputs_is_fine():
         assert run(code, ctx) == [], code
 
 
+def test_output_set_of_a_model_without_outputs():
+    # no output at all, and an <Output> naming a local: the list is not the (empty) set
+    variables = VARIABLES.replace('name="v" valueReference="8" causality="output"',
+                                  'name="v" valueReference="8"')
+    [v] = run("DAE511", ctx_of(variables=variables))
+    assert v.subject == "v" and v.location.path == "/fmiModelDescription/ModelStructure/Output[1]"
+    assert ev(v)["causality"] == "local"
+
+
+def test_output_set_leaves_out_outputs_without_their_own_value_reference():
+    # o2 has no valueReference, o3 shares y's: neither can be listed (the schema and
+    # value-reference-duplicate say why), so <Output> is not asked to list them
+    decl = ('<Float64 name="o2" causality="output"/>'
+            '<Float64 name="o3" valueReference="4" causality="output"/>')
+    assert run("DAE511", ctx_of(variables=VARIABLES + decl)) == []
+
+
 # --- DAE510 model-structure-unknown-vr --------------------------------------------------------
+
+def test_unknown_value_reference_zero():
+    # no variable has valueReference 0 here: an element naming 0 is unresolved like any other
+    variables = VARIABLES.replace('valueReference="0"', 'valueReference="20"')
+    ctx = ctx_of(variables=variables, structure=STRUCTURE + '<InitialUnknown valueReference="0"/>')
+    [v] = run("DAE510", ctx)
+    assert v.subject == "InitialUnknown valueReference=0"
+    assert ev(v) == {"kind": "InitialUnknown", "value_reference": 0}
+
 
 def test_unknown_vr_in_element_and_dependencies():
     structure = STRUCTURE.replace('<Output valueReference="8" dependencies="2"/>',
@@ -398,6 +512,33 @@ def test_second_derivative_of_a_listed_state_is_not_a_missing_derivative():
     assert run("DAE512", ctx_of(variables=variables)) == []
 
 
+def test_derivative_missing_goes_past_every_derivative_it_leaves_alone():
+    # in model order: der(x) is listed, dx2 names a state already covered, d1 names no
+    # variable, d2 a discrete state, do1 links two outputs; only dq is a state derivative
+    # that Model Exchange must list
+    variables = VARIABLES + """
+        <Float64 name="dx2" valueReference="9" derivative="2"/>
+        <Float64 name="d1" valueReference="10" derivative="99"/>
+        <Float64 name="s" valueReference="11" variability="discrete" initial="exact" start="0"/>
+        <Float64 name="d2" valueReference="12" derivative="11"/>
+        <Float64 name="o1" valueReference="13" causality="output"/>
+        <Float64 name="do1" valueReference="14" causality="output" derivative="13"/>
+        <Float64 name="q" valueReference="15" initial="exact" start="0"/>
+        <Float64 name="dq" valueReference="16" derivative="15"/>
+    """
+    [v] = run("DAE512", ctx_of(variables=variables))
+    assert v.subject == "dq"
+    assert ev(v) == {"value_reference": 16, "state": "q", "state_value_reference": 15}
+
+
+@pytest.mark.parametrize("state, derivative", [("output", "local"), ("local", "output")])
+def test_derivative_missing_of_an_output_state_or_an_output_derivative(state, derivative):
+    variables = VARIABLES + (
+        f'<Float64 name="q" valueReference="9" causality="{state}" initial="exact" start="0"/>'
+        f'<Float64 name="dq" valueReference="10" causality="{derivative}" derivative="9"/>')
+    assert subjects("DAE512", ctx_of(variables=variables)) == ["dq"]
+
+
 # --- DAE513 model-structure-initial-unknown-mismatch ------------------------------------------
 
 def test_initial_unknown_missing_derivative_and_output():
@@ -407,6 +548,31 @@ def test_initial_unknown_missing_derivative_and_output():
     assert sorted(v.subject for v in found) == ["der(x)", "v"]
     assert {ev(v)["reason"] for v in found} == {"derivative with initial=calculated",
                                                 "output with initial=calculated"}
+
+
+def test_initial_unknown_missing_calculated_parameter():
+    decl = '<Float64 name="cp" valueReference="9" causality="calculatedParameter"/>'
+    [v] = run("DAE513", ctx_of(variables=VARIABLES + decl))
+    assert v.subject == "cp" and v.location.line == 12
+    assert ev(v) == {"kind": "InitialUnknown", "value_reference": 9,
+                     "reason": "calculatedParameter"}
+
+
+def test_initial_unknown_missing_approx_output():
+    variables = VARIABLES.replace('name="v" valueReference="8" causality="output"',
+                                  'name="v" valueReference="8" causality="output" '
+                                  'initial="approx" start="0"')
+    structure = STRUCTURE.replace('<InitialUnknown valueReference="8" dependencies="2"/>', "")
+    [v] = run("DAE513", ctx_of(variables=variables, structure=structure))
+    assert v.subject == "v" and ev(v)["reason"] == "output with initial=approx"
+
+
+def test_initial_unknown_may_list_a_clock():
+    # MS-05 (d): clocked variables, and the Clocks themselves, may be added
+    variables = VARIABLES + ('<Clock name="c" valueReference="9" causality="input" '
+                             'intervalVariability="triggered"/>')
+    structure = STRUCTURE + '<InitialUnknown valueReference="9"/>'
+    assert run("DAE513", ctx_of(variables=variables, structure=structure)) == []
 
 
 def test_initial_unknown_extra_exact_state():
@@ -546,6 +712,10 @@ def test_derivative_parts():
     listed = STRUCTURE + '<ContinuousStateDerivative valueReference="10"/>'
     assert parts("DAE509", ctx_of(variables=VARIABLES + link, structure=listed))[0] == \
         "target-not-float"
+    link_in = ('<Int32 name="n" valueReference="9" causality="output"/>'
+               '<Float64 name="dn" valueReference="10" causality="input" start="0" '
+               'derivative="9"/>')
+    assert parts("DAE509", ctx_of(variables=VARIABLES + link_in)) == ["target-not-float-io-link"]
     local = ('<Int32 name="n" valueReference="9" causality="input" start="0"/>'
              '<Float64 name="dn" valueReference="10" derivative="9"/>')
     assert parts("DAE509", ctx_of(variables=VARIABLES + local)) == ["target-not-float"]
@@ -585,3 +755,31 @@ def test_nominal_not_positive_part():
     found = {v.subject: v.part
              for v in attribute_values.nominal_not_positive(ctx_of(variables=variables))}
     assert found == {"x": None, "g1": "not-a-state"}
+
+
+# --- DAE515 output-state-self-dependency ------------------------------------------------------
+
+def test_output_state_self_dependency():
+    variables = VARIABLES.replace('name="v" valueReference="8" causality="output"',
+                                  'name="v" valueReference="8"')
+    variables += '<Float64 name="xo" valueReference="9" causality="output" start="1"/>' \
+                 '<Float64 name="der(xo)" valueReference="10" derivative="9"/>'
+    structure = ('<Output valueReference="9" dependencies="2"/>'
+                 '<ContinuousStateDerivative valueReference="3" dependencies="2"/>'
+                 '<ContinuousStateDerivative valueReference="10" dependencies="9"/>')
+    [v] = run("DAE515", ctx_of(variables=variables, structure=structure))
+    assert v.subject == "xo" and v.location.path == "/fmiModelDescription/ModelStructure/Output[1]"
+    assert ev(v)["value_reference"] == 9 and ev(v)["dependencies"] == (2,)
+    structure = structure.replace('dependencies="2"/><Cont', 'dependencies="2 9"/><Cont', 1)
+    assert run("DAE515", ctx_of(variables=variables, structure=structure)) == []
+
+
+def test_output_state_self_dependency_of_an_unknown_state_names_its_reference():
+    # der(x) names a state (9) that no variable has, and an <Output> lists 9: the finding names
+    # the value reference (model-structure-unknown-vr and derivative-invalid say the rest)
+    ctx = ctx_of(variables=VARIABLES.replace('derivative="2"', 'derivative="9"'),
+                 structure=STRUCTURE + '<Output valueReference="9" dependencies="2"/>')
+    [v] = run("DAE515", ctx)
+    assert v.subject == "9" and v.location.line == 17
+    assert v.location.path == "/fmiModelDescription/ModelStructure/Output[2]"
+    assert ev(v)["value_reference"] == 9 and ev(v)["dependencies"] == (2,)

@@ -145,6 +145,10 @@ def test_structured_name_evidence_points_at_the_fault():
     ev = dict(violation.evidence)
     assert violation.subject == "body.2nd"
     assert (ev["alias"], ev["position"], ev["found"]) == (True, 6, "2")
+    (violation,) = found(ctx_of('<Float64 name="a." valueReference="2"/>'))["DAE534"]
+    ev = dict(violation.evidence)
+    assert (ev["position"], ev["found"], ev["expected"]) == (
+        3, "(end of name)", "a letter or '_' starting a name part, or a quoted name '...'")
 
 
 # -- dependenciesKind, Dimension, clocks ------------------------------------------------------
@@ -159,6 +163,25 @@ def test_dependencies_kind_length_counts_every_token():
     assert codes(ctx_of(variables, structure=bad)) == {"DAE535"}
     empty = '<ContinuousStateDerivative valueReference="3" dependencies="" dependenciesKind=""/>'
     assert codes(ctx_of(variables, structure=empty)) == set()
+    # an element without dependenciesKind before the faulty one is passed over, not the end
+    after = ('<ContinuousStateDerivative valueReference="3" dependencies="2"/>'
+             '<InitialUnknown valueReference="3" dependencies="2" '
+             'dependenciesKind="constant constant"/>')
+    (violation,) = found(ctx_of(variables, structure=after))["DAE535"]
+    assert violation.subject == "der(x)"
+    assert dict(violation.evidence) == {"kind": "InitialUnknown", "dependencies": 1, "kinds": 2}
+    # kinds without dependencies on one element, too many kinds on the next: both
+    both = ('<ContinuousStateDerivative valueReference="3" dependenciesKind="constant"/>'
+            '<InitialUnknown valueReference="3" dependencies="2" '
+            'dependenciesKind="constant constant"/>')
+    assert [(v.text, dict(v.evidence)) for v in found(ctx_of(variables, structure=both))[
+        "DAE535"]] == [
+        ("dependenciesKind without dependencies, on the ModelStructure element of 'der(x)'; list "
+         "the dependencies the kinds describe, or remove dependenciesKind",
+         {"kind": "ContinuousStateDerivative", "kinds": 1}),
+        ("dependenciesKind with a different number of entries than dependencies, on the "
+         "ModelStructure element of 'der(x)'; give exactly one kind per dependency",
+         {"kind": "InitialUnknown", "dependencies": 1, "kinds": 2})]
 
 
 def test_dimension_on_the_enable_parameter_is_left_to_the_enable_rule():
@@ -181,11 +204,28 @@ def test_malformed_dimension_reference_is_the_schemas():
     assert codes(ctx_of(var)) == {"DAE536"}
 
 
+def test_dimension_fault_after_a_good_dimension_of_the_same_array():
+    var = ('<Float64 name="v" valueReference="2"><Dimension start="2"/></Float64>'
+           '<Float64 name="u" valueReference="3"><Dimension start="2"/><Dimension start="0"/>'
+           '</Float64>')
+    (violation,) = found(ctx_of(var))["DAE536"]
+    assert violation.subject == "u" and dict(violation.evidence)["fault"] == "zero"
+
+
 def test_huge_numbers_are_no_internal_error():
     digits = "9" * 5000
     var = (f'<Float64 name="s" valueReference="2" variability="discrete" clocks="{digits}"/>'
            f'<Float64 name="v" valueReference="3"><Dimension start="{digits}"/></Float64>')
     assert codes(ctx_of(var)) == set()   # out of range: the schema stage's to report
+
+
+def test_clock_reference_of_twenty_digits_is_read():
+    # the largest UInt64 has 20 digits: read, and named as no variable; one digit more is the
+    # schema stage's
+    var = '<Float64 name="s" valueReference="3" variability="discrete" clocks="{}"/>'
+    (violation,) = found(ctx_of(var.format("18446744073709551615")))["DAE537"]
+    assert dict(violation.evidence)["clock_value_reference"] == 18446744073709551615
+    assert codes(ctx_of(var.format("184467440737095516150"))) == set()
 
 
 def test_clock_references():

@@ -1,6 +1,7 @@
 """Unit tests of the DAE model-structure rules (DAE420-DAE426) and index 1 (DAE601)."""
 from __future__ import annotations
 
+import logging
 import sys
 
 import pytest
@@ -237,6 +238,94 @@ def test_non_float_dependent_is_fine():
     assert _run("DAE423", ctx) == []
 
 
+def test_dependencies_kind_invalid_goes_past_a_kind_the_schema_reports():
+    # 'bogus' is the schema stage's (fmi3Unknown enumerates the kinds); 'fixed' is this rule's
+    found = _run("DAE423", _ctx('<InitialUnknown valueReference="4" dependencies="2 5" '
+                                'dependenciesKind="bogus fixed"/>'))
+    assert [(v.subject, dict(v.evidence)) for v in found] == [
+        ("y", {"element": "InitialUnknown", "kind": "fixed"})]
+
+
+def test_dependencies_kind_of_a_non_float_unknown():
+    # an Int32 unknown may use 'dependent' only: 'constant' beside it is reported, alone
+    found = _run("DAE423", _ctx('<Output valueReference="10" dependencies="2 4" '
+                                'dependenciesKind="dependent constant"/>'))
+    assert [(v.subject, dict(v.evidence)) for v in found] == [
+        ("n", {"element": "Output", "kind": "constant", "type": "Int32"})]
+    assert found[0].text == (
+        "<Output> 'n' is a <Int32> and uses dependenciesKind 'constant'; a non-floating-point "
+        "unknown allows only 'dependent'")
+
+
+def test_dependencies_kind_of_an_unresolved_element_is_left_alone():
+    # the Output of the Int32 n takes the rule past its fast path; the Residual 99 names no
+    # variable (residual-unknown-vr's), so its kinds are not judged against a type
+    assert _run("DAE423", _ctx('<Output valueReference="10"/>'
+                               '<Residual valueReference="99" dependencies="2" '
+                               'dependenciesKind="fixed"/>')) == []
+
+
+def test_dependency_not_allowed_goes_past_event_indicators():
+    # EventIndicator dependencies are for debugging (MS-12) and not judged; the residuals after
+    # it are
+    found = _run("DAE421", _ctx('<EventIndicator valueReference="12" dependencies="12"/>'
+                                '<Residual valueReference="6" dependencies="4 5 13"/>'
+                                '<Residual valueReference="7" dependencies="4 5 12"/>'))
+    assert [(v.subject, dict(v.evidence)["known_is"]) for v in found] == [
+        ("g1", "a calculated parameter"), ("g2", "a local variable")]
+    assert found[1].text == (
+        "<Residual> 'g2' depends on 'loc', a local variable; its allowed knowns are inputs, "
+        "continuous states, parameters, algebraic variables and the independent variable")
+
+
+def test_initial_unknown_may_not_depend_on_a_state_that_is_not_exact(monkeypatch):
+    # a continuous state is a known of the continuous-time elements, but an InitialUnknown's
+    # knowns are inputs, initial="exact" variables and algebraic variables
+    monkeypatch.setattr(sys.modules[__name__], "VARIABLES", VARIABLES.replace(
+        '<Float64 name="x" valueReference="2" start="1" initial="exact"/>',
+        '<Float64 name="x" valueReference="2" start="1" initial="approx"/>'))
+    [v] = _run("DAE421", _ctx('<InitialUnknown valueReference="4" dependencies="2"/>'))
+    assert (v.subject, v.part) == ("y", "initial-unknown-known")
+    assert dict(v.evidence) == {
+        "element": "InitialUnknown", "known": "x", "known_value_reference": 2,
+        "known_is": 'a continuous state with initial="approx"',
+        "allowed": 'inputs, variables with initial="exact", algebraic variables and the '
+                   "independent variable"}
+    assert _run("DAE421", _ctx('<Output valueReference="14" dependencies="2"/>')) == []
+
+
+def test_dependency_not_allowed_goes_past_elements_already_decided():
+    # g1's dependencies are all usual knowns; g2's input u was found allowed for g1 already:
+    # both are passed over, and the Output after them is still judged
+    found = _run("DAE421", _ctx('<Residual valueReference="6" dependencies="4 5"/>'
+                                '<Residual valueReference="6" dependencies="4 5 9"/>'
+                                '<Residual valueReference="7" dependencies="4 5 9"/>'
+                                '<Output valueReference="14" dependencies="12"/>'))
+    assert [(v.subject, v.part) for v in found] == [("yo", "output-or-derivative-known")]
+
+
+def test_dependency_on_a_discrete_time_state(monkeypatch):
+    monkeypatch.setattr(sys.modules[__name__], "VARIABLES", VARIABLES + _DISCRETE)
+    [v] = _run("DAE421", _ctx('<Output valueReference="14" dependencies="30"/>'))
+    assert (v.subject, v.part) == ("yo", "discrete-time-state-known")
+    assert dict(v.evidence)["known"] == "xd"
+    assert dict(v.evidence)["known_value_reference"] == 30
+
+
+def test_dependency_not_allowed_names_the_knowns_of_the_draft():
+    # the fully implicit drafts allow state derivatives as knowns of a residual, and say so
+    ctx = _ctx('<Residual><Formulation index="1" valueReference="6" dependencies="3 4 12"/>'
+               '</Residual><Residual><Formulation index="1" valueReference="7" '
+               'dependencies="3 4"/></Residual>', draft="formulation", legacy=True)
+    [v] = _run("DAE421", ctx)
+    assert v.subject == "g1" and dict(v.evidence)["allowed"] == (
+        "inputs, continuous states, continuous state derivatives, parameters, algebraic "
+        "variables and the independent variable")
+    [v] = _run("DAE421", _ctx('<Residual valueReference="6" dependencies="4 5 12"/>'))
+    assert dict(v.evidence)["allowed"] == (
+        "inputs, continuous states, parameters, algebraic variables and the independent variable")
+
+
 # --- DAE424 initial-unknown-not-allowed --------------------------------------------------------
 
 def test_initial_unknowns():
@@ -278,6 +367,11 @@ def test_state_derivative_without_derivative_attribute():
                '<ContinuousStateDerivative valueReference="88"/>')
     found = _run("DAE425", ctx)
     assert [v.subject for v in found] == ["loc", "valueReference 88"]
+    unresolved = found[1]
+    assert (unresolved.location.file, unresolved.location.line, unresolved.location.path) == (
+        ctx.manifest.file, 4, "/fmiDAEManifest/ModelStructure/ContinuousStateDerivative[3]")
+    assert dict(unresolved.evidence) == {"element": "ContinuousStateDerivative",
+                                         "value_reference": 88}
 
 
 # --- DAE426 output-set-mismatch ----------------------------------------------------------------
@@ -327,13 +421,27 @@ def test_index1_redundant_and_undetermined():
     assert found[0].subject == "g1"
     assert found[0].location.path.endswith("Residual[1]")
     assert "'g1'" in found[0].message and "'z'" in found[0].message
+    # the text a user reads: counts agree with their nouns and verbs
+    assert found[0].text == (
+        "the Jacobian dg/dw of the residuals with respect to the algebraic variables is "
+        "structurally singular (structural rank 1 of 2): 2 residuals 'g1', 'g2' together depend "
+        "only on 1 algebraic variable 'y', so 1 of them is structurally redundant; 1 algebraic "
+        "variable 'z' appears in no residual; give each algebraic variable a residual that "
+        "determines it, or correct the residual dependencies")
 
 
 def test_index1_empty_dependencies_mean_none():
-    ev = _dm(_run("DAE601", _ctx('<Residual valueReference="6"/>'
-                                 '<Residual valueReference="7" dependencies=""/>')))
+    found = _run("DAE601", _ctx('<Residual valueReference="6"/>'
+                                '<Residual valueReference="7" dependencies=""/>'))
+    ev = _dm(found)
     assert ev["over_determined_residuals"] == ("g2",)
     assert ev["over_determined_variables"] == ()
+    assert found[0].text == (
+        "the Jacobian dg/dw of the residuals with respect to the algebraic variables is "
+        "structurally singular (structural rank 1 of 2): 1 residual 'g2' depends on no "
+        "algebraic variable; 2 algebraic variables 'y', 'z' together appear only in 1 residual "
+        "'g1', so 1 of them is determined by no residual; give each algebraic variable a "
+        "residual that determines it, or correct the residual dependencies")
 
 
 def test_index1_only_undetermined_points_at_the_algebraic_variable():
@@ -373,6 +481,98 @@ def test_index1_arrays_are_expanded():
     assert ev["under_determined_variables"] == ("y",)
 
 
+def test_index1_array_size_of_a_dimension_with_start_and_value_reference(monkeypatch):
+    # a <Dimension> giving both start and valueReference has start's size, as
+    # residual-count-mismatch counts it (algebraic.element_count): wb has 2 elements, not 3
+    monkeypatch.setattr(sys.modules[__name__], "VARIABLES", VARIABLES + """
+    <UInt64 name="n3" valueReference="40" causality="structuralParameter" variability="fixed"
+            start="3"/>
+    <Float64 name="wb" valueReference="41"><Dimension start="2" valueReference="40"/></Float64>
+""")
+    ctx = _ctx('<Residual valueReference="17" dependencies="41"/>'
+               '<Residual valueReference="6" dependencies="41"/>', algebraic=("41", "4"))
+    ev = _dm(_run("DAE601", ctx))
+    assert (ev["residuals"], ev["algebraic_variables"]) == (3, 3)
+    assert ev["over_determined_variables"] == ("wb[1]", "wb[2]")
+    assert ev["under_determined_variables"] == ("y",)
+
+
+def _index1_with_edges(ctx: CheckContext, max_edges: int) -> list:
+    options = {**default_catalogue()["DAE601"].option_values, "max_edges": max_edges}
+    return list(index1.index1_structurally_singular(ctx, **options))
+
+
+def test_index1_skipped_above_max_edges_scalars(caplog):
+    # g1 and g2 each list y (2 edges), and z appears in no residual: singular
+    ctx = _ctx('<Residual valueReference="6" dependencies="2 4"/>'
+               '<Residual valueReference="7" dependencies="4 9"/>')
+    with caplog.at_level(logging.WARNING, logger="conformance.checks.index1"):
+        assert _index1_with_edges(ctx, 1) == []
+    assert caplog.messages == ["index-1 check skipped: more than 1 element edges"]
+    caplog.clear()
+    assert len(_index1_with_edges(ctx, 2)) == 1
+    assert caplog.messages == []
+
+
+def test_index1_skipped_above_max_edges_arrays(caplog):
+    # the element edges of all residuals add up: r (2 elements) x w (2) = 4, g1 x w = 2
+    ctx = _ctx('<Residual valueReference="17" dependencies="16"/>'
+               '<Residual valueReference="6" dependencies="16"/>', algebraic=("16", "4"))
+    with caplog.at_level(logging.WARNING, logger="conformance.checks.index1"):
+        assert _index1_with_edges(ctx, 5) == []
+    assert caplog.messages == ["index-1 check skipped: more than 5 element edges"]
+    caplog.clear()
+    [v] = _index1_with_edges(ctx, 6)
+    assert v.subject == "r[1]" and dict(v.evidence)["structural_rank"] == 2
+    assert caplog.messages == []
+
+
+def test_index1_full_rank_that_a_greedy_matching_misses_is_clean():
+    # greedy: g1 takes y, g2 finds y taken (1 of 2); the maximum matching g1-z, g2-y has 2
+    ctx = _ctx('<Residual valueReference="6" dependencies="4 5"/>'
+               '<Residual valueReference="7" dependencies="4"/>')
+    assert _run("DAE601", ctx) == []
+
+
+def test_index1_edges_of_a_residual_without_dependencies_are_not_counted(monkeypatch):
+    # r (2 elements) depends on every algebraic variable (no dependencies attribute): those
+    # edges are not counted against max_edges; g1 x w[1..2] are 2, g3 depends on nothing
+    monkeypatch.setattr(sys.modules[__name__], "VARIABLES",
+                        VARIABLES + '<Float64 name="g3" valueReference="40"/>')
+    ctx = _ctx('<Residual valueReference="17"/><Residual valueReference="6" dependencies="16"/>'
+               '<Residual valueReference="40" dependencies=""/>', algebraic=("16", "4", "5"))
+    [v] = _index1_with_edges(ctx, 2)
+    assert v.subject == "g3"
+    assert dict(v.evidence)["under_determined_residuals"] == ("r[1]", "r[2]", "g1")
+
+
+def test_index1_scalar_residuals_of_array_variables():
+    # w has 2 elements: g1 and g2 hold w[1], w[2], loc holds y (a column index per element,
+    # not per variable)
+    ctx = _ctx('<Residual valueReference="6" dependencies="16"/>'
+               '<Residual valueReference="7" dependencies="16"/>'
+               '<Residual valueReference="12" dependencies="4"/>', algebraic=("16", "4"))
+    assert _run("DAE601", ctx) == []
+
+
+def test_index1_skipped_when_a_residual_size_is_not_known(monkeypatch, caplog):
+    monkeypatch.setattr(sys.modules[__name__], "VARIABLES", VARIABLES + (
+        '<Float64 name="rq" valueReference="42"><Dimension valueReference="99"/></Float64>'))
+    ctx = _ctx('<Residual valueReference="42" dependencies="16"/>', algebraic=("16",))
+    with caplog.at_level(logging.INFO, logger="conformance.checks.index1"):
+        assert _run("DAE601", ctx) == []
+    assert caplog.messages == ["index-1 check skipped: size of rq is not known"]
+
+
+def test_index1_skipped_when_a_size_is_not_known(monkeypatch, caplog):
+    monkeypatch.setattr(sys.modules[__name__], "VARIABLES", VARIABLES + (
+        '<Float64 name="wq" valueReference="42"><Dimension valueReference="99"/></Float64>'))
+    ctx = _ctx('<Residual valueReference="6" dependencies="42"/>', algebraic=("42",))
+    with caplog.at_level(logging.INFO, logger="conformance.checks.index1"):
+        assert _run("DAE601", ctx) == []
+    assert caplog.messages == ["index-1 check skipped: size of wq is not known"]
+
+
 def test_index1_skipped_when_a_reference_does_not_resolve():
     ctx = _ctx('<Residual valueReference="6" dependencies="4"/>'
                '<Residual valueReference="99" dependencies="4"/>')
@@ -387,6 +587,16 @@ def test_index1_duplicates_counted_once():
                '<Residual valueReference="7" dependencies="5"/>'
                '<Residual valueReference="7" dependencies="5"/>', algebraic=("4", "5", "5"))
     assert _run("DAE601", ctx) == []
+
+
+def test_index1_duplicates_keep_each_distinct_variable():
+    # z is listed twice: still two algebraic variables (y, z), and g1 depends on neither
+    ctx = _ctx('<Residual valueReference="6" dependencies="2"/>'
+               '<Residual valueReference="7" dependencies="4"/>', algebraic=("4", "5", "5"))
+    ev = _dm(_run("DAE601", ctx))
+    assert (ev["structural_rank"], ev["residuals"], ev["algebraic_variables"]) == (1, 2, 2)
+    assert ev["over_determined_residuals"] == ("g1",)
+    assert ev["under_determined_variables"] == ("z",)
 
 
 def test_index1_legacy_formulation():

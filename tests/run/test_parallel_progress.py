@@ -10,7 +10,7 @@ from conformance.report.catalogue import default_catalogue
 from conformance.commands.cli import main
 from conformance.run.engine import EngineOptions
 from conformance.run.parallel import check_all
-from conformance.run.progress import NoProgress, Progress, make_progress, wanted
+from conformance.run.progress import Progress
 from tests.run import workers
 from tests.fixtures import BOOLEAN_DAE, INT_DAE
 
@@ -91,19 +91,6 @@ def test_bad_selection_fails_before_any_worker_starts(several):
 class _Tty(io.StringIO):
     def isatty(self) -> bool:
         return True
-
-
-def test_progress_only_on_a_terminal_outside_ci(monkeypatch):
-    monkeypatch.delenv("CI", raising=False)
-    assert wanted("auto", total=3, probes=False, stream=_Tty())
-    assert wanted("auto", total=1, probes=True, stream=_Tty())
-    assert not wanted("auto", total=1, probes=False, stream=_Tty())  # one quick FMU
-    assert not wanted("auto", total=3, probes=True, stream=io.StringIO())  # a pipe
-    assert not wanted("never", total=3, probes=True, stream=_Tty())
-    assert wanted("always", total=1, probes=False, stream=io.StringIO())
-    monkeypatch.setenv("CI", "true")
-    assert not wanted("auto", total=3, probes=True, stream=_Tty())
-    assert isinstance(make_progress("auto", total=3, probes=True, stream=_Tty()), NoProgress)
 
 
 def test_progress_line_counts_and_is_erased(several):

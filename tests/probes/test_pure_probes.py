@@ -8,6 +8,8 @@ hand-made records: no FMU, no worker.
 """
 from __future__ import annotations
 
+import dataclasses
+
 from types import SimpleNamespace
 
 import numpy as np
@@ -410,6 +412,11 @@ MANIFEST = SimpleNamespace(file="manifest.xml", root_line=2, algebraic=[
     SimpleNamespace(vr=6, line=12, path="/m/AlgebraicVariable[2]")])
 ROOT = Location(file="manifest.xml", line=2)
 NAMES = {1: "x", 5: "w1", 6: "w2"}
+# the modelDescription of the state x and the algebraic variable w1, for the trajectory gaps
+MODEL = SimpleNamespace(file="modelDescription.xml", by_vr={
+    1: SimpleNamespace(name="x", vr=1, line=21, path="/fmiModelDescription/x"),
+    5: SimpleNamespace(name="w1", vr=5, line=24, path="/fmiModelDescription/w1")})
+X_DECLARED = Location(file="modelDescription.xml", line=21, path="/fmiModelDescription/x")
 
 
 def _sim_ctx(dae=None, ode=None, facts=None, enable="ok", manifest=MANIFEST, points=(),
@@ -557,6 +564,17 @@ def test_a_next_event_time_behind_an_event_is_named_with_its_count():
     assert list(V.next_event_time_behind_during_simulation(_sim_ctx(_run("dae")))) == []
 
 
+
+def test_a_trajectory_gap_is_located_where_its_variable_is_declared():
+    # an algebraic variable at its <AlgebraicVariable>, any other at its modelDescription
+    # element, a name no variable has at the manifest's root
+    ctx = dataclasses.replace(_sim_ctx(), model=MODEL)
+    assert V._declared_location(ctx, "w2") == Location(file="manifest.xml", line=12,
+                                                       path="/m/AlgebraicVariable[2]")
+    assert V._declared_location(ctx, "x") == X_DECLARED
+    assert V._declared_location(ctx, "nowhere") == ROOT
+    assert V._declared_location(_sim_ctx(), "x") == ROOT   # no model read
+
 # ode-dae-trajectory-mismatch: DAE mode at 1, ODE mode drifting to 1.00004 (gap 39.6 units)
 MISMATCH = dict(factor=10.0, confirm_rtol_ratio=0.1, confirm_levels=2, confirm_shrink=0.5)
 ODE_DRIFT = [1.0, 1.00002, 1.00004]
@@ -582,7 +600,7 @@ def _confirming(monkeypatch, outcomes):
 def test_a_gap_the_tighter_runs_do_not_shrink_is_the_finding(monkeypatch):
     asked = _confirming(monkeypatch, [1.0, 1.00004, 1.0, 1.000039])
     dae, ode = _run("dae"), _run("ode", values=ODE_DRIFT)
-    ctx = _sim_ctx(dae, ode)
+    ctx = dataclasses.replace(_sim_ctx(dae, ode), model=MODEL)
     (v,) = V.ode_dae_trajectory_mismatch(ctx, **MISMATCH)
     wall = R.settings_of(ctx).wall_seconds
     assert asked == [("dae", 1e-7, wall / 4), ("ode", 1e-7, wall / 4),
@@ -591,7 +609,7 @@ def test_a_gap_the_tighter_runs_do_not_shrink_is_the_finding(monkeypatch):
     assert v.message == ("DAE mode and ODE mode give different trajectories: x differs by 39.6 "
                          "tolerance units at t = 1 (limit 10), and not less with tighter "
                          "tolerances")
-    assert v.subject == "x" and v.location == ROOT and v.part is None
+    assert v.subject == "x" and v.location == X_DECLARED and v.part is None
     assert v.cause == causes.through("x")
     ev = thaw(v.evidence)
     assert ev["worst"]["variable"] == "x" and ev["worst"]["t"] == 1.0
@@ -708,10 +726,11 @@ def test_the_runs_must_have_something_in_common_and_no_faulty_indicators():
 
 def test_a_gap_at_the_initial_point_is_the_rules_own_unless_another_owns_it():
     dae, ode = _run("dae"), _run("ode", values=[1.0001, 1.0001, 1.0001])
-    (v,) = V.ode_dae_trajectory_mismatch(_sim_ctx(dae, ode), **MISMATCH)
+    (v,) = V.ode_dae_trajectory_mismatch(dataclasses.replace(_sim_ctx(dae, ode), model=MODEL),
+                                         **MISMATCH)
     assert v.message == ("DAE mode and ODE mode give different trajectories: x differs by 99 "
                          "tolerance units at t = 0 (limit 10), already at the initial point")
-    assert v.part == "initial-gap" and v.location == ROOT
+    assert v.part == "initial-gap" and v.location == X_DECLARED
     assert thaw(v.evidence)["confirmation"] == []
     with pytest.raises(ProbeSkipped) as info:
         list(V.ode_dae_trajectory_mismatch(_sim_ctx(dae, ode, facts={ODE_DAE_FAULT: "z" * 200}),

@@ -42,7 +42,7 @@ from ...numerics.dae import STALLED_SINGULAR
 from ...numerics.settings import Settings, Trajectory
 from ..instruments.api import (EVENT_INDICATOR_FAULT, NEXT_EVENT_FAULT, ODE_DAE_FAULT, PLANNED,
                                FmiError, ProbeContext, ProbeSkipped)
-from ..instruments.common import layout_of, root_location
+from ..instruments.common import layout_of, root_location, var_location
 from .runs import (OutOfTime, both_runs, points_fail, run, run_evidence, settings_of, simulate_mode,
                    time_budget)
 
@@ -59,6 +59,18 @@ def _algebraic_location(ctx: ProbeContext, name: str | None) -> Location:
         if ref.vr == vr:
             return Location(file=m.file, line=ref.line, path=ref.path)
     return root_location(ctx)
+
+
+def _declared_location(ctx: ProbeContext, name: str) -> Location:
+    """Where the variable called ``name`` is declared: an algebraic variable at its manifest
+    element, any other at its modelDescription.xml element; the manifest's root when no
+    variable has the name."""
+    if any(layout_of(ctx).name(vr) == name for vr in layout_of(ctx).algebraic):
+        return _algebraic_location(ctx, name)
+    model = ctx.model
+    var = next((v for v in (model.by_vr.values() if model is not None else ())
+                if v.name == name), None)
+    return var_location(ctx, var.vr) if var is not None else root_location(ctx)
 
 
 # ------------------------------------------------------------------------------ the probes
@@ -174,7 +186,8 @@ def ode_dae_trajectory_mismatch(ctx: ProbeContext, *, factor: float,
         # alpha.1 leaves open for DAE mode (the part).
         part = {} if _same_states(start, dae, factor) else dict(part="initial-gap")
         yield _mismatch(found, start.worst, factor, dae, ode, [],
-                        at="already at the initial point", location=root_location(ctx), **part)
+                        at="already at the initial point",
+                        location=_declared_location(ctx, str(start.worst["variable"])), **part)
         return
     worst = found.worst
     tries = []
@@ -188,7 +201,7 @@ def ode_dae_trajectory_mismatch(ctx: ProbeContext, *, factor: float,
         if "difference" not in tries[-1]:
             break
     yield _mismatch(found, worst, factor, dae, ode, tries, at="and not less with tighter "
-                    "tolerances", location=root_location(ctx),
+                    "tolerances", location=_declared_location(ctx, str(worst["variable"])),
                     part="after-events" if _born_after_event(dae, ode, factor) else None)
 
 

@@ -2,7 +2,6 @@
 user reads about a rule, to the character."""
 from __future__ import annotations
 
-from pathlib import Path
 
 import pytest
 
@@ -11,10 +10,9 @@ from conformance.commands.ruledocs import render_markdown
 from conformance.report.catalogue import Basis, Catalogue, RuleSpec, default_catalogue
 from conformance.report.findings import Severity
 from tests.clikit import lsdae
+from tests.repokit import repo_file
 
-# the repository's docs; from mutmut's copy of the tests (build/mutation-self/...), the real ones
-DOCS = next(folder / "docs" / "rules.md" for folder in Path(__file__).resolve().parents
-            if (folder / "docs" / "rules.md").is_file())
+DOCS = repo_file("docs/rules.md")
 
 RULE = RuleSpec(
     code="DAE999", name="made-up-rule", severity=Severity.WARNING, stage="static",

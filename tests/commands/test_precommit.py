@@ -12,10 +12,9 @@ import pytest
 from conformance.commands.cli import main
 from conformance.commands.precommit import fmu_root, fmu_roots
 from tests.fixtures import BOOLEAN_DAE, INT_DAE
+from tests.repokit import repo_file
 
-# the repository's root; from mutmut's copy of the tests (build/mutation-self/...), the real one
-HOOKS = next(folder / ".pre-commit-hooks.yaml" for folder in Path(__file__).resolve().parents
-             if (folder / ".pre-commit-hooks.yaml").is_file())
+HOOKS = repo_file(".pre-commit-hooks.yaml")
 MANIFEST = "extra/org.fmi-standard.fmi-ls-dae/fmi-ls-manifest.xml"
 
 

@@ -32,15 +32,6 @@ from tests.fixtures import all_cases, materialise
 HERE = Path(__file__).resolve().parent
 
 
-def docs_file(name: str) -> Path:
-    """``docs/<name>`` of the repository: the nearest folder above the tests holding it (the
-    tests also run from a copy of the tree, build/mutation-self/<package>/mutants/, that has no
-    docs/ of its own)."""
-    for parent in HERE.parents:
-        if (parent / "docs" / name).is_file():
-            return parent / "docs" / name
-    raise FileNotFoundError(f"docs/{name} above {HERE}")
-
 EXPECTED = HERE / "expected"
 SCHEMAS = HERE / "schemas"
 MANIFEST = "extra/org.fmi-standard.fmi-ls-dae/fmi-ls-manifest.xml"

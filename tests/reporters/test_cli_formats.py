@@ -9,7 +9,7 @@ from sarif.loader import load_sarif_file
 from conformance.commands.cli import main
 from conformance.reporters import REPORTER_BY_NAME
 from tests.fixtures import all_cases, materialise
-from tests.reporters.samples import docs_file
+from tests.repokit import repo_file
 from tests.reporters.test_github import parse
 from tests.reporters.test_sarif import github_problems
 
@@ -54,6 +54,6 @@ def test_all_ci_formats_in_one_run(tmp_path, monkeypatch):
 
 
 def test_every_format_is_documented():
-    docs = docs_file("formats.md").read_text("utf-8")
+    docs = repo_file("docs/formats.md").read_text("utf-8")
     for name in REPORTER_BY_NAME:
         assert f"| `{name}` |" in docs, f"docs/formats.md does not describe --format {name}"

@@ -11,11 +11,11 @@ from sarif.loader import load_sarif_file
 from conformance.report.catalogue import default_catalogue
 from conformance.report.findings import FmuReport, Location, Report, Severity
 from conformance.reporters import REPORTER_BY_NAME, json_report, sarif
+from tests.repokit import repo_file
 from tests.reporters.samples import (
     MANIFEST,
     SAMPLE_CATALOGUE,
     compare_expected,
-    docs_file,
     engine_catalogue,
     sample_report,
 )
@@ -164,7 +164,7 @@ def test_rule_help_shows_the_basis_of_the_rule_and_of_each_part():
 
 
 def test_docs_anchor_matches_the_generated_rule_docs():
-    docs = docs_file("rules.md").read_text("utf-8")
+    docs = repo_file("docs/rules.md").read_text("utf-8")
     rule = default_catalogue()["DAE203"]
     anchor = sarif.rule_url(rule.code, rule.name).split("#", 1)[1]
     assert f"](#{anchor})" in docs  # the docs' own table of contents links the same anchor
